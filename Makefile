@@ -1,0 +1,30 @@
+# Two commands do all the set-up on a fresh machine with Python >= 3.11 and make:
+#   make run    -> engineering estimate for a human red blood cell in a 4 um capillary
+#   make test   -> the whole default test suite (doctests included)
+PYTHON ?= $(shell command -v python3.11 || command -v python3)
+VENV   := .venv
+BIN    := $(VENV)/bin
+
+.PHONY: run test validation benchmark clean
+
+$(BIN)/vesicle-tube: pyproject.toml
+	$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11) and "Python >= 3.11 is required")'
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[test]'
+	touch $@
+
+run: $(BIN)/vesicle-tube
+	$(BIN)/vesicle-tube estimate
+
+test: $(BIN)/vesicle-tube
+	$(BIN)/python -m pytest -q
+
+validation: $(BIN)/vesicle-tube
+	$(BIN)/python -m pytest -q -m slow
+
+benchmark: $(BIN)/vesicle-tube
+	$(BIN)/python tests/benchmarks/run_benchmarks.py
+
+clean:
+	rm -rf $(VENV) build *.egg-info

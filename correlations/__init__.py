@@ -1,0 +1,1 @@
+"""Published correlations, the apparent-viscosity calculator and the engineering estimate."""

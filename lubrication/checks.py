@@ -1,0 +1,192 @@
+"""Input checking, the project's error and warning classes, and validity ranges as data.
+
+Every public function of ``lubrication``, ``bem`` and ``correlations`` checks its inputs up front
+with the helpers below. Bad input raises :class:`InvalidParameterError` (a :class:`ValueError`)
+whose message names the parameter, the offending value and the valid range. A formula evaluated
+outside the range where its source established it emits an :class:`OutOfRangeWarning`, never an
+error: the caller gets the extrapolated number and is told so.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "InvalidParameterError",
+    "CannotPassError",
+    "OutOfRangeWarning",
+    "ValidityRange",
+    "as_finite",
+    "check_range",
+    "check_positive",
+    "check_fraction",
+    "check_choice",
+    "scalar_or_array",
+]
+
+
+class InvalidParameterError(ValueError):
+    """A parameter is NaN, infinite, of the wrong sign or outside its valid range.
+
+    Attributes ``name``, ``value`` and ``valid`` (a human-readable range) are kept for programs;
+    the message reads ``name=value is invalid: valid range ...``.
+    """
+
+    def __init__(self, name: str, value, valid: str, reason: str = ""):
+        self.name, self.value, self.valid = name, value, valid
+        text = f"{name}={_fmt(value)} is invalid: valid range {valid}"
+        super().__init__(f"{text}; {reason}" if reason else text)
+
+
+class CannotPassError(InvalidParameterError):
+    """The confinement is at or beyond critical: the vesicle cannot pass the tube intact."""
+
+
+class OutOfRangeWarning(UserWarning):
+    """A correlation or asymptotic law was evaluated outside its validity range (extrapolated)."""
+
+
+def _fmt(value) -> str:
+    """Format a scalar, or the first offending element of an array, for messages."""
+    if isinstance(value, str):
+        return repr(value)
+    arr = np.asarray(value, dtype=float) if not isinstance(value, np.ndarray) else value
+    if arr.ndim == 0:
+        return f"{float(arr):.6g}"
+    return f"{float(arr.flat[0]):.6g} (first offending element of an array of shape {arr.shape})"
+
+
+def scalar_or_array(x):
+    """Return a Python float for 0-d input, the ndarray otherwise (the API's return convention)."""
+    x = np.asarray(x)
+    return float(x) if x.ndim == 0 else x
+
+
+def as_finite(name: str, x) -> np.ndarray:
+    """``x`` as a float ndarray; raise :class:`InvalidParameterError` if any element is NaN/inf."""
+    try:
+        arr = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(name, str(x), "a finite real number") from None
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        raise InvalidParameterError(name, arr[bad] if arr.ndim else arr, "a finite real number")
+    return arr
+
+
+def check_range(name: str, x, lo=-math.inf, hi=math.inf, *, lo_open=False, hi_open=False,
+                reason: str = "", error=InvalidParameterError) -> np.ndarray:
+    """Check that every element of ``x`` is finite and within ``lo <(=) x <(=) hi``.
+
+    Returns ``x`` as a float ndarray. The message states the interval in the form
+    ``0 < nu <= 1``.
+    """
+    arr = as_finite(name, x)
+    below = arr <= lo if lo_open else arr < lo
+    above = arr >= hi if hi_open else arr > hi
+    bad = below | above
+    if bad.any():
+        raise error(name, arr[bad] if arr.ndim else arr,
+                    _interval(name, lo, hi, lo_open, hi_open), reason)
+    return arr
+
+
+def check_positive(name: str, x, reason: str = "") -> np.ndarray:
+    """Check ``0 < x < inf`` elementwise (sizes, viscosities, velocities, moduli)."""
+    return check_range(name, x, 0.0, math.inf, lo_open=True, reason=reason)
+
+
+def check_fraction(name: str, x) -> np.ndarray:
+    """Check a hematocrit-like volume fraction, ``0 <= x < 1`` (a fraction, not a percentage)."""
+    arr = as_finite(name, x)
+    reason = "give a fraction, not a percentage" if np.any((arr >= 1) & (arr <= 100)) else ""
+    return check_range(name, arr, 0.0, 1.0, hi_open=True, reason=reason)
+
+
+def check_choice(name: str, value: str, choices) -> str:
+    """Check that ``value`` is one of ``choices`` (for law and method names)."""
+    if value not in choices:
+        raise InvalidParameterError(name, str(value), "one of " + ", ".join(map(repr, choices)))
+    return value
+
+
+def _interval(name, lo, hi, lo_open, hi_open) -> str:
+    """``0 < nu <= 1``, ``lam >= 1``, ``x < 5`` or ``x finite``."""
+    has_lo, has_hi = lo != -math.inf, hi != math.inf
+    if has_lo and has_hi:
+        return f"{lo:g} {'<' if lo_open else '<='} {name} {'<' if hi_open else '<='} {hi:g}"
+    if has_lo:
+        return f"{name} {'>' if lo_open else '>='} {lo:g}"
+    if has_hi:
+        return f"{name} {'<' if hi_open else '<='} {hi:g}"
+    return f"{name} finite"
+
+
+@dataclass(frozen=True)
+class ValidityRange:
+    """Closed box of parameter values inside which a formula was established by its source.
+
+    ``bounds`` holds ``(name, lo, hi)`` triples; ``source`` says who established the range.
+    Build one with :meth:`of`, e.g. ``ValidityRange.of("Chen et al. 2020 eq. transition",
+    nu=(0.6, 0.93), lam=(0.6, 1.81))``.
+    """
+
+    source: str
+    bounds: tuple[tuple[str, float, float], ...]
+
+    @classmethod
+    def of(cls, source: str, **bounds: tuple[float, float]) -> "ValidityRange":
+        return cls(source, tuple((k, float(lo), float(hi)) for k, (lo, hi) in bounds.items()))
+
+    def violations(self, **values) -> list[str]:
+        """Descriptions of the bounds that some element of the given values violates.
+
+        Parameters not named in ``bounds`` are ignored; bounds whose parameter is not given are
+        not checked.
+        """
+        out = []
+        for name, lo, hi in self.bounds:
+            if name not in values:
+                continue
+            arr = np.asarray(values[name], dtype=float)
+            bad = (arr < lo) | (arr > hi)
+            if bad.any():
+                out.append(f"{name}={_fmt(arr[bad] if arr.ndim else arr)} outside "
+                           f"{lo:g} <= {name} <= {hi:g}")
+        return out
+
+    def contains(self, **values) -> bool:
+        """True when every given value lies inside the range."""
+        return not self.violations(**values)
+
+    def distance(self, **values) -> float:
+        """How far outside the box a scalar point lies: the largest relative excess over a bound.
+
+        0 inside; otherwise ``max(|x - bound| / max(|bound|, 1))`` over the violated bounds. Used
+        to pick the least-extrapolated method when none is valid.
+        """
+        d = 0.0
+        for name, lo, hi in self.bounds:
+            if name in values:
+                x = float(values[name])
+                excess = lo - x if x < lo else (x - hi if x > hi else 0.0)
+                bound = lo if x < lo else hi
+                d = max(d, excess / max(abs(bound), 1.0))
+        return d
+
+    def warn_outside(self, what: str, stacklevel: int = 3, **values) -> bool:
+        """Emit an :class:`OutOfRangeWarning` if any value is outside; return True if inside."""
+        bad = self.violations(**values)
+        if bad:
+            warnings.warn(f"{what}: {'; '.join(bad)}, the range of {self.source}; the value is "
+                          "extrapolated.", OutOfRangeWarning, stacklevel=stacklevel)
+        return not bad
+
+    def describe(self) -> str:
+        """One line, e.g. ``0.6 <= nu <= 0.93, 0.6 <= lam <= 1.81 (Chen et al. 2020)``."""
+        box = ", ".join(f"{lo:g} <= {name} <= {hi:g}" for name, lo, hi in self.bounds)
+        return f"{box} ({self.source})"

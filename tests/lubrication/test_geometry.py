@@ -1,0 +1,121 @@
+"""Geometry of confinement against the cubic, its closed-form inverse and Chen et al. 2020."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+from lubrication import geometry as g
+from lubrication.checks import CannotPassError, InvalidParameterError
+
+NU = st.floats(0.05, 1.0)
+
+
+def cubic(lam_c, nu):
+    """Residual of Chen et al. 2020 eq. critic, written independently of the implementation."""
+    return 2 * lam_c**3 - 3 * nu ** (-2 / 3) * lam_c**2 + 1
+
+
+def test_lam_c_is_a_root_of_the_cubic_to_machine_precision():
+    nu = np.linspace(0.3, 1.0, 20001)
+    assert np.max(np.abs(cubic(g.critical_confinement(nu), nu))) <= 1e-12
+
+
+def test_lam_c_is_the_largest_root():
+    for nu in (0.3, 0.6, 0.9, 0.999):
+        roots = np.roots([2, -3 * nu ** (-2 / 3), 0, 1])
+        largest = max(r.real for r in roots if abs(r.imag) < 1e-9)
+        assert g.critical_confinement(nu) == pytest.approx(largest, rel=1e-12)
+
+
+@given(nu=NU)
+def test_lam_c_relative_residual(nu):
+    lam_c = g.critical_confinement(nu)
+    assert abs(cubic(lam_c, nu)) <= 1e-14 * 2 * lam_c**3 + 1e-14
+    assert lam_c >= 1.0
+
+
+@given(nu=NU)
+def test_nu_c_inverts_lam_c(nu):
+    assert g.critical_reduced_volume(g.critical_confinement(nu)) == pytest.approx(nu, rel=1e-12, abs=1e-12)
+
+
+@given(a=st.floats(0.05, 0.999), b=st.floats(0.05, 0.999))
+def test_lam_c_decreases_with_nu(a, b):
+    if a < b:
+        assert g.critical_confinement(a) > g.critical_confinement(b)
+
+
+@given(shape=st.sampled_from([(3,), (2, 4), (1, 5, 2)]))
+def test_vectorised_shapes(shape):
+    nu = np.full(shape, 0.7)
+    for f in (g.critical_confinement, g.critical_length, g.reduced_area_excess):
+        out = f(nu)
+        assert out.shape == shape
+        assert np.all(out == f(0.7))
+    lam = np.linspace(0.5, 1.2, 4)[:, None]
+    assert g.clearance(np.array([0.6, 0.8, 0.95]), lam).shape == (4, 3)
+
+
+def test_sphere_limits():
+    assert g.critical_confinement(1.0) == 1.0
+    assert g.critical_length(1.0) == 2.0
+    assert g.critical_reduced_volume(1.0) == 1.0
+
+
+def test_chen_2020_statements():
+    """Chen et al. 2020 §III: nu = 0.6, 90 um^3 -> lam_c ~ 1.98, ell_c ~ 11, d_c ~ 2.8 um, L_c ~ 15.4 um."""
+    R0 = g.volume_radius(90.0)
+    assert R0 == pytest.approx(2.78, abs=0.005)           # "R0 ~ 2.8 um"
+    assert g.critical_confinement(0.6) == pytest.approx(1.98, abs=0.005)
+    assert g.critical_length(0.6) == pytest.approx(11.04, abs=0.005)   # physics-notes: 11.04
+    assert g.critical_diameter_um(0.6, R0) == pytest.approx(2.8, abs=0.05)
+    # Our 15.48 um versus the paper's 15.4 um: the paper rounds ell_c to 11 (11 * 1.40 = 15.4).
+    assert g.critical_length_um(0.6, R0) == pytest.approx(15.4, rel=0.01)
+
+
+def test_cell_geometry_against_direct_formulas():
+    nu, R0 = g.cell_from_volume_area(90.0, 135.0)
+    RA = math.sqrt(135.0 / (4 * math.pi))
+    assert R0 == pytest.approx((3 * 90.0 / (4 * math.pi)) ** (1 / 3), rel=1e-14)
+    assert nu == pytest.approx((R0 / RA) ** 3, rel=1e-13)
+    assert g.confinement_from_diameter(R0, 4.0) == pytest.approx(R0 / 2.0, rel=1e-15)
+
+
+@given(R0=st.floats(0.1, 100.0))
+def test_sphere_has_unit_reduced_volume(R0):
+    volume = 4 / 3 * math.pi * R0**3
+    area = 4 * math.pi * R0**2
+    assert g.reduced_volume(volume, area) == pytest.approx(1.0, abs=1e-12)
+    assert g.volume_radius(volume) == pytest.approx(R0, rel=1e-13)
+    assert g.area_radius(area) == pytest.approx(R0, rel=1e-13)
+
+
+def test_clearance_near_critical():
+    lam_c = g.critical_confinement(0.6)
+    assert g.clearance(0.6, 0.98 * lam_c) == pytest.approx(0.02, rel=1e-12)
+
+
+@pytest.mark.parametrize("bad", [0.0, -0.1, 1.2, math.nan, math.inf])
+def test_bad_reduced_volume(bad):
+    with pytest.raises(InvalidParameterError, match="nu="):
+        g.critical_confinement(bad)
+
+
+@given(nu=st.floats(0.3, 0.99), excess=st.floats(0.0, 1.0))
+def test_cannot_pass_at_or_beyond_critical(nu, excess):
+    lam = g.critical_confinement(nu) * (1 + excess)
+    with pytest.raises(CannotPassError, match="cannot pass"):
+        g.clearance(nu, lam)
+
+
+def test_error_messages_name_value_and_range():
+    with pytest.raises(InvalidParameterError, match=r"area=50 .*area >= 97\.12"):
+        g.reduced_volume(90.0, 50.0)
+    with pytest.raises(InvalidParameterError, match=r"lam=0\.5 .*lam >= 1"):
+        g.critical_reduced_volume(0.5)
+    with pytest.raises(InvalidParameterError, match=r"diameter_um=-4"):
+        g.confinement_from_diameter(2.8, -4.0)
+    with pytest.raises(InvalidParameterError, match=r"volume_fl="):
+        g.cell_from_volume_area("ninety", 135.0)
