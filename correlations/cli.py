@@ -1,0 +1,343 @@
+"""The ``vesicle-tube`` command line.
+
+Contract (every command follows it): ``vesicle-tube COMMAND [options] [--json]``. People get a
+table with units; ``--json`` prints one JSON object on stdout. Exit status 0 on success, 2 on
+invalid input (one line on stderr naming the parameter, its value and the valid range), 1 when a
+solver did not converge (with ``--json`` the object is still printed, ``"converged": false``).
+Out-of-range warnings go to stderr, one line each, and into the JSON under ``"warnings"``.
+
+Heavy imports (matplotlib, scipy, numba) happen only inside the commands that need them, so that
+``vesicle-tube estimate`` starts fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import warnings
+
+from lubrication.checks import InvalidParameterError, OutOfRangeWarning, check_positive
+
+EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INVALID = 0, 1, 2
+
+# Human labels of the output keys (key -> label); keys not listed are printed as they are.
+LABELS = {
+    "nu": "reduced volume nu", "lam": "confinement lam = R0/R", "lam_c": "critical confinement lam_c",
+    "ell_c": "critical length ell_c = L_c/R_c", "delta": "clearance delta = 1 - lam/lam_c",
+    "passes": "passes the tube intact", "R0_um": "volume radius R0", "d_c_um": "critical diameter d_c",
+    "L_c_um": "critical length L_c", "ca_b": "bending capillary number Ca_B",
+    "V_over_U": "speed V/U", "V_mm_s": "cell speed V", "film": "film thickness h/R",
+    "film_nm": "film thickness h", "ell": "length ell = L/R", "length_um": "length L",
+    "dp_plus_R0": "extra pressure drop dp+ R0/(eta U)", "dp_plus_R": "extra pressure drop dp+ R/(eta U)",
+    "dp_plus_Pa": "extra pressure drop dp+", "shape_class": "shape class",
+    "tension_front": "front tension gamma_F/(eta V)", "tension_front_etaU": "front tension gamma_F/(eta U)",
+    "tension_front_mN_m": "front tension gamma_F", "tube_hematocrit": "tube hematocrit H_T",
+    "discharge_hematocrit": "discharge hematocrit H_D", "eta_rel": "relative apparent viscosity",
+}
+
+# Order of rows in the human estimate table.
+ESTIMATE_ROWS = ("nu", "lam", "lam_c", "delta", "ell_c", "passes", "R0_um", "d_c_um", "L_c_um",
+                 "ca_b", "shape_class", "V_over_U", "V_mm_s", "dp_plus_R0", "dp_plus_R",
+                 "dp_plus_Pa", "film", "film_nm", "ell", "length_um", "tension_front",
+                 "tension_front_etaU", "tension_front_mN_m", "tube_hematocrit",
+                 "discharge_hematocrit", "eta_rel")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with the contract's one-line error and exit status 2."""
+
+    def error(self, message):
+        self.exit(EXIT_INVALID, f"{self.prog}: error: {message}\n")
+
+
+def _fmt(value) -> str:
+    if value is None:
+        return "—"
+    if isinstance(value, bool):
+        return "yes" if value else "NO"
+    if isinstance(value, float):
+        return f"{value:.4g}" if math.isfinite(value) else str(value)
+    return str(value)
+
+
+def format_rows(rows, title: str = "") -> str:
+    """Fixed-width table of (label, value, unit, method, flag) rows."""
+    head = ("quantity", "value", "unit", "method", "")
+    cells = [head] + [tuple(_fmt(c) if i == 1 else ("" if c is None else str(c))
+                            for i, c in enumerate(r)) for r in rows]
+    widths = [max(len(r[i]) for r in cells) for i in range(4)]
+    lines = [title] if title else []
+    for k, r in enumerate(cells):
+        lines.append("  ".join(c.ljust(w) for c, w in zip(r[:4], widths)) + ("  " + r[4] if r[4] else ""))
+        if k == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def _quantity_rows(quantities: dict, keys) -> list:
+    rows = []
+    for key in keys:
+        if key not in quantities:
+            continue
+        q = quantities[key]
+        flag = "" if q.valid or q.method in (None, "input") else "EXTRAPOLATED (outside validity)"
+        if q.value is None and q.method is None:
+            flag = "no valid method" if q.note.startswith("no valid") else q.note
+        rows.append((LABELS.get(key, key), q.value, q.unit, q.method or "", flag))
+    return rows
+
+
+def _emit(obj: dict, args, human: str) -> None:
+    if args.json:
+        print(json.dumps(obj, indent=2, default=_json_default))
+    else:
+        print(human)
+
+
+def _json_default(x):
+    try:
+        return x.tolist()
+    except AttributeError:
+        return str(x)
+
+
+# --------------------------------------------------------------------------- commands
+
+def cmd_geometry(args) -> dict:
+    from lubrication import geometry as g
+    if args.nu is not None and (args.volume_fl is not None or args.area_um2 is not None):
+        raise InvalidParameterError("nu", args.nu, "either --nu or --volume-fl/--area-um2, not both")
+    if args.nu is None:
+        if args.volume_fl is None or args.area_um2 is None:
+            raise InvalidParameterError("volume_fl", args.volume_fl,
+                                        "give --nu NU, or both --volume-fl and --area-um2")
+        nu, R0 = g.cell_from_volume_area(args.volume_fl, args.area_um2)
+        lam = None if args.diameter_um is None else g.confinement_from_diameter(R0, args.diameter_um)
+    else:
+        nu, R0 = float(args.nu), None
+        if args.diameter_um is not None:
+            raise InvalidParameterError("diameter_um", args.diameter_um,
+                                        "only with --volume-fl/--area-um2 (use --lam with --nu)")
+        lam = args.lam
+    lam_c, ell_c = g.critical_confinement(nu), g.critical_length(nu)
+    out = {"command": "geometry", "converged": True, "nu": nu, "lam_c": lam_c, "ell_c": ell_c,
+           "reduced_area_excess": g.reduced_area_excess(nu)}
+    if R0 is not None:
+        out.update(R0_um=R0, d_c_um=g.critical_diameter_um(nu, R0), L_c_um=g.critical_length_um(nu, R0))
+    if lam is not None:
+        lam = float(check_positive("lam", lam))
+        passes = bool(lam < lam_c)
+        out.update(lam=lam, passes=passes, delta=(1.0 - lam / lam_c) if passes else None)
+        if lam >= 1.0:
+            out["nu_c"] = g.critical_reduced_volume(lam)
+    units = {"R0_um": "um", "d_c_um": "um", "L_c_um": "um"}
+    rows = [(LABELS.get(k, k), v, units.get(k, "-"), "Chen et al. 2020 §III", "")
+            for k, v in out.items() if k not in ("command", "converged")]
+    return out, format_rows(rows, "Geometry of confinement")
+
+
+def cmd_estimate(args) -> dict:
+    from .estimate import estimate, estimate_dimensionless
+    physical = any(getattr(args, k) is not None for k in
+                   ("volume_fl", "area_um2", "diameter_um", "velocity_mm_s",
+                    "plasma_viscosity_mpas", "bending_modulus_j"))
+    if args.nu is not None or args.lam is not None:
+        if physical:
+            raise InvalidParameterError("nu", args.nu, "either --nu/--lam or physical inputs, not both")
+        if args.nu is None or args.lam is None:
+            raise InvalidParameterError("lam" if args.lam is None else "nu", None,
+                                        "give both --nu and --lam for the dimensionless estimate")
+        h = {f"{args.hematocrit_kind}_hematocrit": args.hematocrit} if args.hematocrit is not None else {}
+        est = estimate_dimensionless(args.nu, args.lam, args.ca_b, extrapolate=args.extrapolate, **h)
+        title = f"Dimensionless estimate: nu = {args.nu:g}, lam = {args.lam:g}"
+    else:
+        if args.ca_b is not None:
+            raise InvalidParameterError("ca_b", args.ca_b, "only with --nu/--lam (physical inputs set Ca_B)")
+        kw = {k: getattr(args, k) for k in ("volume_fl", "area_um2", "diameter_um", "velocity_mm_s",
+                                            "plasma_viscosity_mpas", "bending_modulus_j")
+              if getattr(args, k) is not None}
+        est = estimate(**kw, hematocrit=args.hematocrit, hematocrit_kind=args.hematocrit_kind,
+                       extrapolate=args.extrapolate)
+        i = est.inputs
+        title = (f"Engineering estimate: cell {i['volume_fl']:g} fL, {i['area_um2']:g} um^2 in a "
+                 f"{i['diameter_um']:g} um tube; U = {i['velocity_mm_s']:g} mm/s, eta = "
+                 f"{i['plasma_viscosity_mpas']:g} mPa s, kappa = {i['bending_modulus_j']:g} J")
+    out = est.to_dict()
+    from .registry import QUANTITIES
+    why = [f"  {k}: {est.quantities[k].note}" for k in QUANTITIES
+           if est.quantities[k].value is None and est.quantities[k].note.startswith("no valid")]
+    human = "\n".join([format_rows(_quantity_rows(est.quantities, ESTIMATE_ROWS), title),
+                       f"\nregime: {est.regime}"] + [f"note: {n}" for n in est.notes] +
+                      (["why no value:"] + why if why else []) +
+                      ["methods and validity ranges: correlations/registry.py, docs/user-guide.md"])
+    if args.plot:
+        from .plotting import plot_estimate
+        _save_plot(plot_estimate(est), args.plot)
+    return out, human
+
+
+def cmd_viscosity(args) -> dict:
+    from . import viscosity as v
+    law = args.law
+    d, h, kind = args.diameter_um, args.hematocrit, args.hematocrit_kind
+    if law == "single-file":
+        from .estimate import estimate
+        est = estimate(diameter_um=d, hematocrit=h, hematocrit_kind=kind, extrapolate=args.extrapolate)
+        q = est.quantities["eta_rel"]
+        out = {"command": "viscosity", "converged": True, "law": "single-file (Chen et al. 2020 §IV.D)",
+               "diameter_um": d, "eta_rel": q.value, "valid": q.valid,
+               "tube_hematocrit": est["tube_hematocrit"], "discharge_hematocrit": est["discharge_hematocrit"],
+               "dp_plus_R0": est["dp_plus_R0"], "method": q.method, "note": q.note,
+               "cell": "RBC defaults (90 fL, 135 um^2)"}
+        rows = [("law", out["law"], "", "", ""), ("diameter", d, "um", "", ""),
+                *_quantity_rows(est.quantities, ("tube_hematocrit", "discharge_hematocrit",
+                                                 "dp_plus_R0", "eta_rel"))]
+        return out, format_rows(rows, "Apparent viscosity (single-file vesicle model, RBC defaults)")
+    if kind == "tube":
+        h_t = h
+        h_d = v.discharge_hematocrit_fahraeus(d, h, constants=args.constants)
+    else:
+        h_d = h
+        h_t = v.tube_hematocrit_fahraeus(d, h, constants=args.constants)
+    eta = v.relative_viscosity(d, h_d, law=law)
+    out = {"command": "viscosity", "converged": True, "law": law, "diameter_um": d,
+           "discharge_hematocrit": h_d, "tube_hematocrit": h_t, "eta_rel": eta,
+           "fahraeus_constants": args.constants if kind == "tube" else None}
+    rows = [("law", law, "", v.__name__, ""), ("diameter", d, "um", "input", ""),
+            (LABELS["discharge_hematocrit"], h_d, "-", "input" if kind == "discharge" else
+             f"Fahraeus ({args.constants})", ""),
+            (LABELS["tube_hematocrit"], h_t, "-", "input" if kind == "tube" else
+             f"Fahraeus ({args.constants})", ""),
+            (LABELS["eta_rel"], eta, "-", law, "")]
+    if args.plot:
+        from .plotting import plot_relative_viscosity
+        _save_plot(plot_relative_viscosity(hematocrits=(h_d,)), args.plot)
+    return out, format_rows(rows, f"Relative apparent viscosity ({law})")
+
+
+def cmd_fahraeus(args) -> dict:
+    from . import viscosity as v
+    d = args.diameter_um
+    if (args.discharge_hematocrit is None) == (args.tube_hematocrit is None):
+        raise InvalidParameterError("discharge_hematocrit", args.discharge_hematocrit,
+                                    "give exactly one of --discharge-hematocrit, --tube-hematocrit")
+    if args.discharge_hematocrit is not None:
+        h_d = args.discharge_hematocrit
+        h_t = v.tube_hematocrit_fahraeus(d, h_d, constants=args.constants)
+    else:
+        h_t = args.tube_hematocrit
+        h_d = v.discharge_hematocrit_fahraeus(d, h_t, constants=args.constants)
+    out = {"command": "fahraeus", "converged": True, "constants": args.constants, "diameter_um": d,
+           "discharge_hematocrit": h_d, "tube_hematocrit": h_t, "ratio_HT_over_HD": h_t / h_d if h_d else None}
+    rows = [(LABELS["discharge_hematocrit"], h_d, "-", f"Fahraeus ({args.constants})", ""),
+            (LABELS["tube_hematocrit"], h_t, "-", f"Fahraeus ({args.constants})", ""),
+            ("H_T/H_D", out["ratio_HT_over_HD"], "-", "", "")]
+    return out, format_rows(rows, f"Fahraeus effect in a {d:g} um tube")
+
+
+def _save_plot(ax, path: str) -> None:
+    """Write the figure of ``ax`` atomically (temporary file, then rename)."""
+    import os
+    import tempfile
+    directory = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(dir=directory, suffix=os.path.splitext(path)[1] or ".png")
+    os.close(fd)
+    try:
+        ax.figure.savefig(tmp, dpi=150, bbox_inches="tight")
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    print(f"figure written to {path}", file=sys.stderr)
+
+
+# --------------------------------------------------------------------------- parser
+
+def build_parser() -> argparse.ArgumentParser:
+    from .estimate import RBC_DEFAULTS
+    p = _Parser(prog="vesicle-tube", description="Vesicles and red blood cells in narrow tubes "
+                "(Stokes flow): geometry, engineering estimates, apparent viscosity.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    def common(sp):
+        sp.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+
+    g = sub.add_parser("geometry", help="critical confinement, length and diameter")
+    g.add_argument("--nu", type=float, help="reduced volume, 0 < nu <= 1 [-]")
+    g.add_argument("--lam", type=float, help="confinement R0/R [-] (with --nu)")
+    g.add_argument("--volume-fl", type=float, help="cell volume [fL = um^3]")
+    g.add_argument("--area-um2", type=float, help="membrane area [um^2]")
+    g.add_argument("--diameter-um", type=float, help="tube diameter [um] (with --volume-fl/--area-um2)")
+    common(g)
+    g.set_defaults(func=cmd_geometry)
+
+    e = sub.add_parser("estimate", help="engineering estimate (default: human RBC in a 4 um capillary)")
+    d = RBC_DEFAULTS
+    e.add_argument("--volume-fl", type=float, help=f"cell volume [fL] (default {d['volume_fl']:g})")
+    e.add_argument("--area-um2", type=float, help=f"membrane area [um^2] (default {d['area_um2']:g})")
+    e.add_argument("--diameter-um", type=float, help=f"tube diameter [um] (default {d['diameter_um']:g})")
+    e.add_argument("--velocity-mm-s", type=float,
+                   help=f"mean flow velocity U [mm/s] (default {d['velocity_mm_s']:g})")
+    e.add_argument("--plasma-viscosity-mpas", type=float,
+                   help=f"suspending viscosity [mPa s] (default {d['plasma_viscosity_mpas']:g})")
+    e.add_argument("--bending-modulus-j", type=float,
+                   help=f"bending modulus kappa [J] (default {d['bending_modulus_j']:g})")
+    e.add_argument("--nu", type=float, help="reduced volume [-] (dimensionless estimate, with --lam)")
+    e.add_argument("--lam", type=float, help="confinement R0/R [-] (dimensionless estimate)")
+    e.add_argument("--ca-b", type=float, help="bending capillary number eta U R0^2/kappa [-] (with --nu/--lam)")
+    e.add_argument("--hematocrit", type=float, help="hematocrit, a fraction in [0, 1) [-]")
+    e.add_argument("--hematocrit-kind", choices=("tube", "discharge"), default="tube",
+                   help="whether --hematocrit is the tube (H_T) or discharge (H_D) value (default tube)")
+    e.add_argument("--extrapolate", action="store_true",
+                   help="fill quantities no method covers with flagged extrapolations")
+    e.add_argument("--plot", metavar="FILE", help="write V/U and dp+ vs lam with this case marked (PNG)")
+    common(e)
+    e.set_defaults(func=cmd_estimate)
+
+    v = sub.add_parser("viscosity", help="relative apparent viscosity of blood in a tube")
+    v.add_argument("--diameter-um", type=float, required=True, help="tube diameter [um]")
+    v.add_argument("--hematocrit", type=float, required=True, help="hematocrit, a fraction in [0, 1) [-]")
+    v.add_argument("--hematocrit-kind", choices=("discharge", "tube"), default="discharge",
+                   help="kind of --hematocrit (default discharge); converted with Fahraeus")
+    v.add_argument("--law", choices=("pries1992", "pries1994", "pries2005", "single-file"),
+                   default="pries1992", help="viscosity law (default pries1992, in vitro)")
+    v.add_argument("--constants", choices=("pries1990", "pries1992"), default="pries1992",
+                   help="Fahraeus constants for hematocrit conversion (default pries1992)")
+    v.add_argument("--extrapolate", action="store_true", help="single-file: allow flagged extrapolation")
+    v.add_argument("--plot", metavar="FILE", help="write eta_rel(d) for the laws (PNG)")
+    common(v)
+    v.set_defaults(func=cmd_viscosity)
+
+    f = sub.add_parser("fahraeus", help="tube <-> discharge hematocrit (Fahraeus effect)")
+    f.add_argument("--diameter-um", type=float, required=True, help="tube diameter [um]")
+    f.add_argument("--discharge-hematocrit", type=float, help="discharge hematocrit H_D, fraction [-]")
+    f.add_argument("--tube-hematocrit", type=float, help="tube hematocrit H_T, fraction [-]")
+    f.add_argument("--constants", choices=("pries1990", "pries1992"), default="pries1990",
+                   help="fit constants (a, b) of the Fahraeus relation (default pries1990)")
+    common(f)
+    f.set_defaults(func=cmd_fahraeus)
+    return p
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", OutOfRangeWarning)
+        try:
+            out, human = args.func(args)
+        except InvalidParameterError as exc:
+            print(f"vesicle-tube {args.command}: error: {exc}", file=sys.stderr)
+            return EXIT_INVALID
+    messages = [str(w.message) for w in caught if issubclass(w.category, OutOfRangeWarning)]
+    for m in messages:
+        print(f"warning: {m}", file=sys.stderr)
+    if messages:
+        out["warnings"] = messages
+    _emit(out, args, human)
+    return EXIT_OK if out.get("converged", True) else EXIT_NOT_CONVERGED
+
+
+if __name__ == "__main__":
+    sys.exit(main())

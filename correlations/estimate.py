@@ -1,0 +1,346 @@
+r"""Engineering estimate for a vesicle or red blood cell in a narrow tube.
+
+Scalings (stated once): lengths by the tube radius R where named ``/R`` (film h/R, length
+:math:`\ell = L/R`), otherwise by the volume radius R0; velocities by the mean Poiseuille
+velocity U; extra pressure drop :math:`\Delta p^+ R_0/(\eta U)` (``dp_plus_R0``) and
+:math:`\Delta p^+ R/(\eta U)` (``dp_plus_R``); front tension by :math:`\eta V` (``tension_front``,
+the inverse vesicle capillary number 1/Ca_v) and by :math:`\eta U` (``tension_front_etaU``).
+
+Every number carries the method that produced it (a row of :mod:`correlations.registry`) and
+whether the case lies inside that method's validity range. Where no method is valid the number
+is reported as unavailable with the reasons, unless ``extrapolate=True`` is asked for, in which
+case the least-extrapolated method is used and the number is flagged ``valid=False``.
+
+Defaults describe a human red blood cell in a capillary (physics-notes §6 and sources there):
+volume 90 fL and area 135 µm² (Evans & Fung 1972; nu = 0.61, Chen et al. 2020 use 0.6), bending
+modulus 2e-19 J (Evans 1983; Chen et al. 2020), plasma viscosity 1.2 mPa·s at 37 °C (Késmárky et
+al. 2008), capillary red-cell velocity 1 mm/s (Ivanov et al. 1981; Pries & Secomb 2003), tube
+diameter 4 µm (a narrow capillary; capillaries are 4-8 µm). Bilayer rupture tension 3-10 mN/m
+(Evans et al. 2003; Rawicz et al. 2000).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+from lubrication.checks import (CannotPassError, InvalidParameterError, OutOfRangeWarning,
+                                check_choice, check_fraction, check_positive, check_range)
+from lubrication.geometry import (cell_from_volume_area, check_passes, critical_diameter_um,
+                                  critical_length, critical_length_um)
+
+from .registry import METHODS, QUANTITIES
+
+__all__ = ["RBC_DEFAULTS", "RUPTURE_TENSION_MN_M", "Quantity", "Estimate", "estimate",
+           "estimate_dimensionless"]
+
+RBC_DEFAULTS = {
+    "volume_fl": 90.0,            # Evans & Fung 1972 (mean corpuscular volume ~90 fL)
+    "area_um2": 135.0,            # Evans & Fung 1972
+    "diameter_um": 4.0,           # narrow capillary
+    "velocity_mm_s": 1.0,         # mean flow velocity U; capillary RBC speeds ~1 mm/s
+    "plasma_viscosity_mpas": 1.2,  # plasma at 37 degC
+    "bending_modulus_j": 2e-19,   # Chen et al. 2020, Evans 1983
+}
+
+#: Lysis tension range of lipid bilayers and RBC membranes [mN/m] (Rawicz et al. 2000; Evans et al. 2003).
+RUPTURE_TENSION_MN_M = (3.0, 10.0)
+
+# Regime boundaries: the validity limits of the small-object and near-critical laws.
+_SMALL_LAM, _NEAR_CRITICAL_DELTA = 0.5, 0.1
+
+_HEMATOCRIT_KEYS = ("tube_hematocrit", "discharge_hematocrit", "eta_rel")
+NO_HEMATOCRIT = "not computed: no hematocrit given"
+
+_UNITS = {
+    "V_over_U": "-", "film": "h/R", "ell": "L/R", "dp_plus_R0": "dp+ R0/(eta U)",
+    "shape_class": "", "tension_front": "eta V", "tube_hematocrit": "-",
+    "discharge_hematocrit": "-", "eta_rel": "-",
+}
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A number of the estimate with its provenance.
+
+    ``value`` is None when no valid method exists (and extrapolation was not asked for).
+    """
+
+    value: float | str | None
+    unit: str
+    method: str | None
+    valid: bool
+    source: str = ""
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Result of :func:`estimate` or :func:`estimate_dimensionless` (frozen; inputs included)."""
+
+    inputs: dict
+    quantities: dict
+    regime: str
+    notes: tuple = ()
+    provenance: dict = field(default_factory=dict)
+
+    def __getitem__(self, key):
+        return self.quantities[key].value
+
+    def to_dict(self) -> dict:
+        """Flat JSON-ready dict: each key its value, plus ``methods`` (provenance per key)."""
+        out = {"command": "estimate", "converged": True, "regime": self.regime}
+        out.update({k: q.value for k, q in self.quantities.items()})
+        out["methods"] = {k: {"method": q.method, "valid": q.valid, "source": q.source,
+                              "unit": q.unit, **({"note": q.note} if q.note else {})}
+                          for k, q in self.quantities.items()}
+        out["inputs"] = dict(self.inputs)
+        out["notes"] = list(self.notes)
+        out["provenance"] = dict(self.provenance)
+        return out
+
+
+def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool) -> Quantity:
+    """Evaluate ``quantity`` with the first valid method of the table (see module docstring)."""
+    reasons, fallback = [], None
+    for m in (m for m in METHODS if m.quantity == quantity):
+        missing = [r for r in m.requires if r not in known]
+        if missing:
+            reasons.append(f"{m.name}: needs a valid {', '.join(missing)}")
+            if extrapolate and all(r in known or r in extrapolated for r in m.requires):
+                fallback = fallback or (math.inf, m)
+            continue
+        bad = m.validity.violations(**known)
+        if not bad:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", OutOfRangeWarning)
+                return Quantity(m.evaluate(known), _UNITS[quantity], m.name, True, m.source)
+        reasons.append(f"{m.name}: {'; '.join(bad)}")
+        dist = m.validity.distance(**known)
+        if extrapolate and (fallback is None or dist < fallback[0]):
+            fallback = (dist, m)
+    note = "no valid method (" + " | ".join(reasons) + ")" if reasons else "no method"
+    if fallback is None:
+        return Quantity(None, _UNITS[quantity], None, False, "", note)
+    m = fallback[1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutOfRangeWarning)
+        value = m.evaluate({**extrapolated, **known})
+    return Quantity(value, _UNITS[quantity], m.name, False, m.source, "EXTRAPOLATED; " + note)
+
+
+def _regime(lam: float, delta: float) -> str:
+    if lam <= _SMALL_LAM:
+        return f"small object (lam <= {_SMALL_LAM})"
+    if delta <= _NEAR_CRITICAL_DELTA:
+        return f"near-critical (delta = 1 - lam/lam_c <= {_NEAR_CRITICAL_DELTA})"
+    return "intermediate confinement (no closed-form law is established here)"
+
+
+def _provenance() -> dict:
+    import numpy
+    from lubrication import __version__
+    return {"package": "vesicle-tube", "version": __version__, "numpy": numpy.__version__}
+
+
+def _hematocrits(tube_hematocrit, discharge_hematocrit) -> dict:
+    """Checked hematocrit inputs (at most one of the two kinds)."""
+    if tube_hematocrit is not None and discharge_hematocrit is not None:
+        raise InvalidParameterError("discharge_hematocrit", discharge_hematocrit,
+                                    "unset when tube_hematocrit is given",
+                                    "give one hematocrit; the other follows from V/U or Fahraeus")
+    out = {}
+    if tube_hematocrit is not None:
+        out["tube_hematocrit"] = float(check_fraction("tube_hematocrit", tube_hematocrit))
+    if discharge_hematocrit is not None:
+        out["discharge_hematocrit"] = float(check_fraction("discharge_hematocrit", discharge_hematocrit))
+    return out
+
+
+def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapolate: bool):
+    """Geometry state, then every quantity of the table; returns (state, quantities)."""
+    lam_c = check_passes(nu, lam)
+    state = {"nu": nu, "lam": lam, "lam_c": lam_c, "delta": 1.0 - lam / lam_c,
+             "ell_c": critical_length(nu), **hematocrits}
+    if ca_b is not None:
+        state["ca_b"] = ca_b
+    if diameter_um is not None:
+        state["diameter_um"] = diameter_um
+    known, extrapolated, quantities = dict(state), {}, {}
+    for name in QUANTITIES:
+        if name in hematocrits:
+            quantities[name] = Quantity(hematocrits[name], _UNITS[name], "input", True)
+            continue
+        if name in _HEMATOCRIT_KEYS and not hematocrits:
+            quantities[name] = Quantity(None, _UNITS[name], None, False, "", NO_HEMATOCRIT)
+            continue
+        q = quantities[name] = _select(name, known, extrapolated, extrapolate)
+        if q.value is not None:
+            (known if q.valid else extrapolated)[name] = q.value
+    geometric = {k: Quantity(state[k], "-", "geometry (Chen 2020 §III)", True)
+                 for k in ("lam_c", "ell_c", "delta")}
+    derived = {}
+    p = quantities["dp_plus_R0"]
+    if p.value is not None:
+        derived["dp_plus_R"] = Quantity(p.value / lam, "dp+ R/(eta U)", p.method, p.valid, p.source, p.note)
+    t, v = quantities["tension_front"], quantities["V_over_U"]
+    if t.value is not None and v.value is not None:
+        derived["tension_front_etaU"] = Quantity(t.value * v.value, "eta U", t.method,
+                                                 t.valid and v.valid, t.source)
+    return state, {"nu": Quantity(nu, "-", "input", True), "lam": Quantity(lam, "-", "input", True),
+                   "passes": Quantity(True, "", "lam < lam_c", True),
+                   **geometric, **quantities, **derived}
+
+
+def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
+                           tube_hematocrit: float | None = None,
+                           discharge_hematocrit: float | None = None,
+                           extrapolate: bool = False) -> Estimate:
+    r"""Dimensionless estimate for reduced volume ``nu`` and confinement ``lam = R0/R``.
+
+    Parameters
+    ----------
+    nu : float
+        Reduced volume, 0 < nu <= 1 [-].
+    lam : float
+        Confinement R0/R, 0 < lam < lam_c(nu) [-].
+    ca_b : float, optional
+        Bending capillary number eta U R0^2/kappa [-]; when omitted the correlations of Chen et
+        al. 2020 are assumed to apply (they hold for Ca_B >= ~10).
+    tube_hematocrit, discharge_hematocrit : float, optional
+        At most one, a fraction in [0, 1); enables the single-file apparent viscosity.
+    extrapolate : bool
+        Fill quantities that no method covers with the least-extrapolated method, flagged.
+
+    Raises
+    ------
+    CannotPassError
+        If lam >= lam_c(nu).
+
+    Examples
+    --------
+    >>> e = estimate_dimensionless(0.9, 1.25)
+    >>> e.regime.split(" (")[0], round(e["V_over_U"], 3), e.quantities["V_over_U"].method
+    ('near-critical', 1.06, 'near_critical_barakat2018a')
+    """
+    hematocrits = _hematocrits(tube_hematocrit, discharge_hematocrit)
+    nu, lam = float(check_range("nu", nu, 0.0, 1.0, lo_open=True)), float(check_positive("lam", lam))
+    if ca_b is not None:
+        ca_b = float(check_positive("ca_b", ca_b))
+    state, quantities = _core(nu, lam, ca_b, hematocrits, None, extrapolate)
+    inputs = {"nu": nu, "lam": lam, "ca_b": ca_b, **hematocrits}
+    return Estimate(inputs=inputs, quantities=quantities, regime=_regime(lam, state["delta"]),
+                    notes=_notes(quantities, ca_b), provenance=_provenance())
+
+
+def _notes(quantities: dict, ca_b) -> tuple:
+    notes = []
+    missing = [k for k, q in quantities.items() if q.value is None and q.note.startswith("no valid")]
+    if missing:
+        notes.append(f"No closed-form method is valid for {', '.join(missing)} here; use "
+                     "extrapolate=True (--extrapolate) for flagged extrapolations.")
+    if ca_b is not None and ca_b < 10:
+        notes.append(f"Ca_B = {ca_b:.3g} < 10: bending matters; Chen et al. 2020 correlations were "
+                     "established for 10 <= Ca_B <= 1e4 (Ca_B = 50 for most).")
+    return tuple(notes)
+
+
+def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
+             area_um2: float = RBC_DEFAULTS["area_um2"],
+             diameter_um: float = RBC_DEFAULTS["diameter_um"],
+             velocity_mm_s: float = RBC_DEFAULTS["velocity_mm_s"],
+             plasma_viscosity_mpas: float = RBC_DEFAULTS["plasma_viscosity_mpas"],
+             bending_modulus_j: float = RBC_DEFAULTS["bending_modulus_j"], *,
+             hematocrit: float | None = None, hematocrit_kind: str = "tube",
+             extrapolate: bool = False) -> Estimate:
+    r"""Engineering estimate from physical inputs (defaults: human RBC in a 4 µm capillary).
+
+    Parameters
+    ----------
+    volume_fl : float
+        Cell volume [fL = µm³].
+    area_um2 : float
+        Membrane area [µm²].
+    diameter_um : float
+        Tube diameter [µm].
+    velocity_mm_s : float
+        Mean velocity U of the undisturbed flow [mm/s] (centreline 2U).
+    plasma_viscosity_mpas : float
+        Suspending-fluid viscosity eta [mPa·s].
+    bending_modulus_j : float
+        Membrane bending modulus kappa [J].
+    hematocrit : float, optional
+        Volume fraction in [0, 1) (not %); enables the apparent viscosity eta_rel.
+    hematocrit_kind : {"tube", "discharge"}
+        Whether ``hematocrit`` is the tube (H_T) or discharge (H_D) hematocrit.
+    extrapolate : bool
+        See :func:`estimate_dimensionless`.
+
+    Returns
+    -------
+    Estimate
+        Dimensionless quantities as in :func:`estimate_dimensionless` plus ``R0_um``, ``d_c_um``,
+        ``L_c_um``, ``ca_b``, ``V_mm_s``, ``dp_plus_Pa``, ``film_nm``, ``length_um`` and
+        ``tension_front_mN_m``, each with its method and validity.
+
+    Raises
+    ------
+    CannotPassError
+        If the tube is narrower than the critical diameter d_c.
+
+    Examples
+    --------
+    >>> e = estimate()                       # RBC, 4 µm capillary, 1 mm/s
+    >>> round(e["nu"], 3), round(e["lam"], 3), round(e["d_c_um"], 2), e["passes"]
+    (0.61, 1.39, 2.85, True)
+    >>> e["V_over_U"] is None                # intermediate confinement: no closed form is valid
+    True
+    """
+    kind = check_choice("hematocrit_kind", hematocrit_kind, ("tube", "discharge"))
+    nu, R0 = cell_from_volume_area(volume_fl, area_um2)
+    diameter_um = float(check_positive("diameter_um", diameter_um))
+    U = float(check_positive("velocity_mm_s", velocity_mm_s)) * 1e-3           # [m/s]
+    eta = float(check_positive("plasma_viscosity_mpas", plasma_viscosity_mpas)) * 1e-3  # [Pa s]
+    kappa = float(check_positive("bending_modulus_j", bending_modulus_j))    # [J]
+    d_c = critical_diameter_um(nu, R0)
+    if diameter_um <= d_c:
+        raise CannotPassError("diameter_um", diameter_um, f"diameter_um > d_c = {d_c:.4g} um",
+                              f"the cell (nu={nu:.3g}, R0={R0:.3g} um) cannot pass this tube intact")
+    lam = 2.0 * R0 / diameter_um
+    R0_m, R_m = R0 * 1e-6, diameter_um / 2 * 1e-6
+    ca_b = eta * U * R0_m**2 / kappa
+    hematocrits = {} if hematocrit is None else _hematocrits(
+        hematocrit if kind == "tube" else None, hematocrit if kind == "discharge" else None)
+    state, q = _core(nu, lam, ca_b, hematocrits, diameter_um, extrapolate)
+    inputs = {"volume_fl": float(volume_fl), "area_um2": float(area_um2), "diameter_um": diameter_um,
+              "velocity_mm_s": U * 1e3, "plasma_viscosity_mpas": eta * 1e3, "bending_modulus_j": kappa,
+              "hematocrit": hematocrit, "hematocrit_kind": kind}
+    geo = "geometry (Chen 2020 §III)"
+    physical = {"R0_um": Quantity(R0, "um", geo, True), "d_c_um": Quantity(d_c, "um", geo, True),
+                "L_c_um": Quantity(critical_length_um(nu, R0), "um", geo, True),
+                "ca_b": Quantity(ca_b, "-", "eta U R0^2/kappa", True)}
+    scale = {"V_over_U": ("V_mm_s", U * 1e3, "mm/s"),
+             "dp_plus_R0": ("dp_plus_Pa", eta * U / R0_m, "Pa"),
+             "film": ("film_nm", R_m * 1e9, "nm"),
+             "ell": ("length_um", R_m * 1e6, "um")}
+    for key, (new, factor, unit) in scale.items():
+        src = q[key]
+        physical[new] = Quantity(None if src.value is None else src.value * factor, unit,
+                                 src.method, src.valid, src.source, src.note)
+    t, v = q["tension_front"], q["V_over_U"]
+    if t.value is not None and v.value is not None:
+        physical["tension_front_mN_m"] = Quantity(t.value * eta * v.value * U * 1e3, "mN/m",
+                                                  t.method, t.valid and v.valid, t.source)
+    else:
+        physical["tension_front_mN_m"] = Quantity(None, "mN/m", None, False, "",
+                                                  "needs tension_front and V_over_U")
+    notes = list(_notes(q, ca_b))
+    tension = physical["tension_front_mN_m"].value
+    if tension is not None:
+        lo, hi = RUPTURE_TENSION_MN_M
+        verdict = ("below" if tension < lo else "within" if tension <= hi else "ABOVE")
+        notes.append(f"Front tension {tension:.3g} mN/m is {verdict} the bilayer rupture range "
+                     f"{lo:g}-{hi:g} mN/m.")
+    return Estimate(inputs=inputs, quantities={**q, **physical}, regime=_regime(lam, state["delta"]),
+                    notes=tuple(notes), provenance=_provenance())

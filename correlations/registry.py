@@ -1,0 +1,158 @@
+r"""The method table of the engineering estimate: which formula gives which quantity, where.
+
+This is the one place that decides how :func:`correlations.estimate.estimate` obtains each
+number. For every output quantity the table lists candidate methods in order of preference; the
+estimate takes the first one whose validity range contains the case (and whose inputs are
+themselves valid). Where no method is valid the quantity is reported as unavailable, with the
+reason; it is extrapolated (and flagged ``valid=False``) only when the caller asks for it.
+
+Later solvers (the lubrication BVP, issue 4; the BEM, issues 5-6) extend the table by adding
+:class:`Method` rows for the range where they are valid.
+
+State passed to the methods (dimensionless unless named): ``nu``, ``lam``, ``lam_c``, ``delta``
+(= 1 - lam/lam_c), ``ell_c``, ``ca_b`` (= eta U R0^2/kappa, absent when unknown), the quantities
+computed earlier in table order, and the optional hematocrits.
+
+====================  =============================  ==============================================
+quantity              methods, in order of preference  validity (range constant, with its source)
+====================  =============================  ==============================================
+V_over_U              small_sphere_faxen             lam <= 0.5, nu >= 0.9 (SMALL_VESICLE_RANGE)
+                      near_critical_barakat2018a     delta <= 0.1 (asymptotics.NEAR_CRITICAL_RANGE)
+film                  geometric_chen2020             delta <= 0.1 (film.FILM_RANGE_CHEN2020)
+ell                   length_chen2020                delta <= 0.1, nu >= 0.6 (shape.LENGTH_RANGE_CHEN2020)
+dp_plus_R0            small_sphere_faxen             lam <= 0.5, nu >= 0.9
+                      film_scaling_chen2020          delta <= 0.1 (pressure.DP_PLUS_FILM_RANGE_CHEN2020)
+                      near_critical_barakat2018a     delta <= 0.1
+shape_class           transition_chen2020            0.6 <= nu, 0.6 <= lam <= 1.94, 10 <= Ca_B <= 1e4
+tension_front         film_inverse_chen2020          Ca_v <= 1e-2, i.e. film <= 0.093
+tube_hematocrit       single_file_flux               d <= 8 um (viscosity.CHEN2020_RANGE)
+                      fahraeus_pries1992             3.3 <= d <= 1978 um (viscosity.FAHRAEUS_RANGE)
+discharge_hematocrit  single_file_flux, fahraeus...  as tube_hematocrit
+eta_rel               single_file_chen2020           d <= 8 um, dp_plus_R0 and H_T valid
+                      pries1992_in_vitro             3.3 <= d <= 1978 um, H_D <= 0.9
+====================  =============================  ==============================================
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from lubrication import asymptotics
+from lubrication.checks import ValidityRange
+
+from . import film, pressure, shape, viscosity
+
+__all__ = ["Method", "METHODS", "QUANTITIES"]
+
+
+@dataclass(frozen=True)
+class Method:
+    """One row of the method table.
+
+    Attributes
+    ----------
+    quantity : str
+        Output key the method produces.
+    name : str
+        Short method name, reported beside every number it produces.
+    source : str
+        Citation with equation label.
+    validity : ValidityRange
+        Box of state variables (names as in the module docstring) where the method holds.
+    evaluate : callable
+        ``evaluate(state) -> value`` with ``state`` the dict described in the module docstring.
+    requires : tuple of str
+        Quantities that must already be available *and valid* in the state.
+    """
+
+    quantity: str
+    name: str
+    source: str
+    validity: ValidityRange
+    evaluate: Callable[[dict], float | str]
+    requires: tuple[str, ...] = ()
+
+
+# Chen et al. 2020 state that their vesicle V/U and dp+ agree with the small rigid-sphere laws to
+# within 1 % for lam < 0.5 "particularly for nearly spherical vesicles", nu = 0.6 being a clear
+# exception; we accept the laws for a vesicle only from nu >= 0.9 (our conservative choice).
+SMALL_VESICLE_RANGE = ValidityRange.of(
+    "Chen et al. 2020 §IV.C (small rigid sphere applied to a quasi-spherical vesicle)",
+    lam=(0.0, 0.5), nu=(0.9, 1.0))
+
+# Single-file flow (d up to ~8 um). In the dimensionless estimate (no diameter known) only the
+# requirements on dp+ and V/U apply.
+SINGLE_FILE_RANGE = viscosity.CHEN2020_RANGE
+
+
+# eq. sfilm4 is fitted for Ca_v <= 1e-2; with delta = c0 Ca_v^(2/3) that is a bound on the film.
+_TENSION_RANGE = ValidityRange.of(
+    film.CAPILLARY_RANGE_CHEN2020.source,
+    film=(0.0, film.film_from_capillary_chen2020(film.CAPILLARY_RANGE_CHEN2020.bounds[0][2])))
+
+
+def _eta_single_file(s: dict) -> float:
+    # Lengths in units of the tube radius: d = 2, R0 = lam.
+    return viscosity.viscosity_single_file_chen2020(s["dp_plus_R0"], 2.0, s["lam"], s["tube_hematocrit"])
+
+def _fahraeus_tube(s: dict) -> float:
+    return viscosity.tube_hematocrit_fahraeus(s["diameter_um"], s["discharge_hematocrit"], constants="pries1992")
+
+
+def _fahraeus_discharge(s: dict) -> float:
+    return viscosity.discharge_hematocrit_fahraeus(s["diameter_um"], s["tube_hematocrit"], constants="pries1992")
+
+
+def _eta_pries1992(s: dict) -> float:
+    return viscosity.viscosity_vitro_pries1992(s["diameter_um"], s["discharge_hematocrit"])
+
+
+METHODS: tuple[Method, ...] = (
+    Method("V_over_U", "small_sphere_faxen", "Chen et al. 2020 eq. small1 (Faxen)",
+           SMALL_VESICLE_RANGE, lambda s: asymptotics.speed_small_sphere(s["lam"])),
+    Method("V_over_U", "near_critical_barakat2018a",
+           "Barakat & Shaqfeh 2018a as Chen et al. 2020 eq. asmyp1",
+           asymptotics.NEAR_CRITICAL_RANGE,
+           lambda s: asymptotics.speed_near_critical(s["nu"], s["lam"])),
+    Method("dp_plus_R0", "small_sphere_faxen", "Chen et al. 2020 eq. small2",
+           SMALL_VESICLE_RANGE, lambda s: asymptotics.dp_plus_small_sphere(s["lam"])),
+    Method("dp_plus_R0", "film_scaling_chen2020", "Chen et al. 2020 fig. dpa_film: (3/2) lam ell/delta",
+           pressure.DP_PLUS_FILM_RANGE_CHEN2020,
+           lambda s: pressure.dp_plus_film_chen2020(s["lam"], s["ell"], s["film"]),
+           requires=("ell", "film")),
+    Method("dp_plus_R0", "near_critical_barakat2018a",
+           "Barakat & Shaqfeh 2018a as Chen et al. 2020 eq. asmyp2",
+           asymptotics.NEAR_CRITICAL_RANGE,
+           lambda s: asymptotics.dp_plus_near_critical(s["nu"], s["lam"])),
+    Method("film", "geometric_chen2020", "Chen et al. 2020 eq. sfilm2: h/R = 1 - lam/lam_c",
+           film.FILM_RANGE_CHEN2020, lambda s: film.film_thickness_chen2020(s["nu"], s["lam"])),
+    Method("ell", "length_chen2020", "Chen et al. 2020 eq. sL: ell = ell_c lam/lam_c",
+           shape.LENGTH_RANGE_CHEN2020, lambda s: shape.length_chen2020(s["nu"], s["lam"])),
+    Method("shape_class", "transition_chen2020", "Chen et al. 2020 eq. transition",
+           shape.SHAPE_CLASS_RANGE_CHEN2020, lambda s: shape.shape_class_chen2020(s["nu"], s["lam"])),
+    Method("tension_front", "film_inverse_chen2020",
+           "Chen et al. 2020 eqs. sfilm4, tension2: gamma_F/(eta V) = (delta/c0)^(-3/2), c0 = 2",
+           _TENSION_RANGE,
+           lambda s: 1.0 / film.capillary_from_film_chen2020(s["film"]), requires=("film",)),
+    # Cell-flux conservation in single file: H_D U = H_T V, i.e. H_D/H_T = V/U (physics-notes §6).
+    Method("tube_hematocrit", "single_file_flux", "cell flux conservation: H_T = H_D/(V/U)",
+           SINGLE_FILE_RANGE, lambda s: s["discharge_hematocrit"] / s["V_over_U"],
+           requires=("V_over_U", "discharge_hematocrit")),
+    Method("tube_hematocrit", "fahraeus_pries1992", "Pries et al. 1992 Fahraeus relation",
+           viscosity.FAHRAEUS_RANGE, _fahraeus_tube, requires=("diameter_um", "discharge_hematocrit")),
+    Method("discharge_hematocrit", "single_file_flux", "cell flux conservation: H_D = H_T V/U",
+           SINGLE_FILE_RANGE, lambda s: s["tube_hematocrit"] * s["V_over_U"],
+           requires=("V_over_U", "tube_hematocrit")),
+    Method("discharge_hematocrit", "fahraeus_pries1992", "Pries et al. 1992 Fahraeus relation, inverted",
+           viscosity.FAHRAEUS_RANGE, _fahraeus_discharge, requires=("diameter_um", "tube_hematocrit")),
+    Method("eta_rel", "single_file_chen2020", "Chen et al. 2020 §IV.D",
+           SINGLE_FILE_RANGE, _eta_single_file, requires=("dp_plus_R0", "tube_hematocrit")),
+    Method("eta_rel", "pries1992_in_vitro", "Pries, Neuhaus & Gaehtgens 1992",
+           viscosity.PRIES1992_RANGE, _eta_pries1992, requires=("diameter_um", "discharge_hematocrit")),
+)
+
+#: Output quantities in evaluation order (later rows may require earlier ones).
+QUANTITIES = ("V_over_U", "film", "ell", "dp_plus_R0", "shape_class", "tension_front",
+              "tube_hematocrit", "discharge_hematocrit", "eta_rel")
+
