@@ -6,7 +6,7 @@ import numpy as np
 
 from .viscosity import VISCOSITY_LAWS, relative_viscosity
 
-__all__ = ["plot_relative_viscosity"]
+__all__ = ["plot_relative_viscosity", "plot_estimate"]
 
 
 def plot_relative_viscosity(diameters_um=None, hematocrits=(0.2, 0.45), laws=VISCOSITY_LAWS,
@@ -50,3 +50,48 @@ def plot_relative_viscosity(diameters_um=None, hematocrits=(0.2, 0.45), laws=VIS
     ax.set_ylabel("η_rel [-]")
     ax.legend()
     return ax
+
+
+def plot_estimate(est, ax=None):
+    """V/U and dp+ R0/(eta U) against confinement for the case's nu, with the case marked.
+
+    Two panels (the asymptotic laws of :mod:`lubrication.plotting`, solid where valid, dashed
+    where extrapolated); the estimate's values are marked where available, hollow when flagged
+    as extrapolated.
+
+    Parameters
+    ----------
+    est : correlations.estimate.Estimate
+        The estimate to mark.
+    ax : sequence of two matplotlib Axes, optional
+        Axes for V/U and dp+; a new headless figure with two panels if None.
+
+    Returns
+    -------
+    ax : matplotlib.axes.Axes
+        The V/U panel (``ax.figure`` holds both).
+
+    Examples
+    --------
+    >>> from correlations.estimate import estimate_dimensionless
+    >>> ax = plot_estimate(estimate_dimensionless(0.9, 1.25))
+    >>> len(ax.figure.axes)
+    2
+    """
+    from lubrication.plotting import plot_dp_plus_asymptotics, plot_speed_asymptotics
+    if ax is None:
+        from matplotlib.figure import Figure
+        ax = Figure(figsize=(10.0, 4.0)).subplots(1, 2)
+    nu, lam = est["nu"], est["lam"]
+    plot_speed_asymptotics(nu=(nu,), ax=ax[0])
+    plot_dp_plus_asymptotics(nu=(nu,), ax=ax[1])
+    for panel, key in zip(ax, ("V_over_U", "dp_plus_R0")):
+        q = est.quantities[key]
+        if q.value is not None:
+            panel.plot([lam], [q.value], "o", ms=8, color="C3",
+                       mfc="C3" if q.valid else "none", label=f"this case ({q.method})")
+        else:
+            panel.axvline(lam, color="C3", ls=":", label="this case (no valid method)")
+        panel.legend(fontsize="small")
+    ax[0].set_title(f"ν = {nu:.3g}, λ = {lam:.3g}, λc = {est['lam_c']:.3g}")
+    return ax[0]

@@ -47,7 +47,7 @@ def _draw(ax, nu, law, ylabel, log):
             frac_in = np.linspace(1.0 - d_hi, 1.0 - 1e-3, 100)   # stop short of the pole at lam_c
             frac_out = np.linspace(0.8, 1.0 - d_hi, 40)
             (line,) = ax.plot(lam_c * frac_in, near(n, lam_c * frac_in), "-",
-                              label=f"ν = {n:g} (Chen eq. asmyp)")
+                              label=f"ν = {n:.3g} (Chen eq. asmyp)")
             ax.plot(lam_c * frac_out, near(n, lam_c * frac_out), "--", color=line.get_color())
     ax.set_xlabel(_LAM_LABEL)
     ax.set_ylabel(ylabel)
