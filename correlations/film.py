@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from lubrication.checks import ValidityRange, check_positive, check_range, scalar_or_array
-from lubrication.geometry import check_passes
+from lubrication.geometry import clearance
 
 __all__ = [
     "C0_CHEN2020",
@@ -76,8 +76,7 @@ def film_thickness_chen2020(nu, lam):
     >>> round(film_thickness_chen2020(0.6, 1.94), 4)
     0.0208
     """
-    lam_c = np.asarray(check_passes(nu, lam))
-    delta = 1.0 - np.asarray(lam, dtype=float) / lam_c
+    delta = np.asarray(clearance(nu, lam))
     FILM_RANGE_CHEN2020.warn_outside("film_thickness_chen2020", delta=delta)
     return scalar_or_array(delta)
 

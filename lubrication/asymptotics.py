@@ -274,9 +274,9 @@ def speed_near_critical(nu, lam):
     >>> round(speed_near_critical(0.6, 1.94), 4)
     1.0212
     """
-    lam, delta, X = _near_critical(nu, lam)
+    _, delta, _ = _near_critical(nu, lam)
     NEAR_CRITICAL_RANGE.warn_outside("speed_near_critical", delta=delta)
-    return scalar_or_array(1.0 + 4.0 / 3.0 * (3.0 * X - 2.0) / (4.0 * X - 3.0) * delta)
+    return scalar_or_array(1.0 + np.asarray(speed_slope_near_critical(nu)) * delta)
 
 
 def dp_plus_near_critical(nu, lam):
