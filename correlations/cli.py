@@ -35,6 +35,7 @@ LABELS = {
     "tension_front": "front tension gamma_F/(eta V)", "tension_front_etaU": "front tension gamma_F/(eta U)",
     "tension_front_mN_m": "front tension gamma_F", "tube_hematocrit": "tube hematocrit H_T",
     "discharge_hematocrit": "discharge hematocrit H_D", "eta_rel": "relative apparent viscosity",
+    "reduced_area_excess": "reduced excess area 4pi(nu^-2/3 - 1)", "nu_c": "largest nu passing (nu_c)",
 }
 
 # Order of rows in the human estimate table.
@@ -91,7 +92,7 @@ def _quantity_rows(quantities: dict, keys) -> list:
 
 def _emit(obj: dict, args, human: str) -> None:
     if args.json:
-        print(json.dumps(obj, indent=2, default=_json_default))
+        print(json.dumps(obj, indent=2, default=_json_default, ensure_ascii=False))
     else:
         print(human)
 
@@ -183,18 +184,7 @@ def cmd_viscosity(args) -> dict:
     law = args.law
     d, h, kind = args.diameter_um, args.hematocrit, args.hematocrit_kind
     if law == "single-file":
-        from .estimate import estimate
-        est = estimate(diameter_um=d, hematocrit=h, hematocrit_kind=kind, extrapolate=args.extrapolate)
-        q = est.quantities["eta_rel"]
-        out = {"command": "viscosity", "converged": True, "law": "single-file (Chen et al. 2020 §IV.D)",
-               "diameter_um": d, "eta_rel": q.value, "valid": q.valid,
-               "tube_hematocrit": est["tube_hematocrit"], "discharge_hematocrit": est["discharge_hematocrit"],
-               "dp_plus_R0": est["dp_plus_R0"], "method": q.method, "note": q.note,
-               "cell": "RBC defaults (90 fL, 135 um^2)"}
-        rows = [("law", out["law"], "", "", ""), ("diameter", d, "um", "", ""),
-                *_quantity_rows(est.quantities, ("tube_hematocrit", "discharge_hematocrit",
-                                                 "dp_plus_R0", "eta_rel"))]
-        return out, format_rows(rows, "Apparent viscosity (single-file vesicle model, RBC defaults)")
+        return _single_file_viscosity(args)
     if kind == "tube":
         h_t = h
         h_d = v.discharge_hematocrit_fahraeus(d, h, constants=args.constants)
@@ -215,6 +205,39 @@ def cmd_viscosity(args) -> dict:
         from .plotting import plot_relative_viscosity
         _save_plot(plot_relative_viscosity(hematocrits=(h_d,)), args.plot)
     return out, format_rows(rows, f"Relative apparent viscosity ({law})")
+
+
+def _single_file_viscosity(args) -> dict:
+    """Chen et al. 2020 single-file model with the estimate's dp+ for an RBC at that diameter.
+
+    Only this law is used: where the estimate has no valid dp+ the result is null with the
+    reason (or a flagged extrapolation with --extrapolate), never another law's number.
+    """
+    from .estimate import estimate
+    from .viscosity import viscosity_single_file_chen2020
+    est = estimate(diameter_um=args.diameter_um, hematocrit=args.hematocrit,
+                   hematocrit_kind=args.hematocrit_kind, extrapolate=args.extrapolate)
+    dp, h_t = est.quantities["dp_plus_R0"], est.quantities["tube_hematocrit"]
+    eta, note = None, ""
+    if dp.value is None:
+        note = f"no dp+ for this cell and tube: {dp.note}"
+    elif h_t.value is None:
+        note = f"no tube hematocrit: {h_t.note}"
+    else:
+        eta = viscosity_single_file_chen2020(dp.value, args.diameter_um, est["R0_um"], h_t.value)
+    valid = eta is not None and dp.valid and h_t.valid and args.diameter_um <= 8.0
+    out = {"command": "viscosity", "converged": True, "law": "single-file (Chen et al. 2020 §IV.D)",
+           "diameter_um": args.diameter_um, "eta_rel": eta, "valid": valid,
+           "tube_hematocrit": h_t.value, "discharge_hematocrit": est["discharge_hematocrit"],
+           "dp_plus_R0": dp.value, "dp_plus_method": dp.method, "note": note,
+           "cell": "RBC defaults (90 fL, 135 um^2)"}
+    if note:
+        print(f"warning: {note}", file=sys.stderr)
+    rows = [("law", out["law"], "", "", ""), ("diameter", args.diameter_um, "um", "input", ""),
+            *_quantity_rows(est.quantities, ("tube_hematocrit", "discharge_hematocrit", "dp_plus_R0")),
+            (LABELS["eta_rel"], eta, "-", "single-file (Chen 2020)",
+             "" if valid else ("no valid dp+" if eta is None else "EXTRAPOLATED (outside validity)"))]
+    return out, format_rows(rows, "Apparent viscosity (single-file vesicle model, RBC defaults)")
 
 
 def cmd_fahraeus(args) -> dict:

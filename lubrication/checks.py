@@ -66,15 +66,19 @@ def scalar_or_array(x):
     return float(x) if x.ndim == 0 else x
 
 
-def as_finite(name: str, x) -> np.ndarray:
-    """``x`` as a float ndarray; raise :class:`InvalidParameterError` if any element is NaN/inf."""
+def as_finite(name: str, x, valid: str = "a finite real number") -> np.ndarray:
+    """``x`` as a float ndarray; raise :class:`InvalidParameterError` if any element is NaN/inf.
+
+    ``valid`` is the range quoted in the message.
+    """
     try:
         arr = np.asarray(x, dtype=float)
     except (TypeError, ValueError):
-        raise InvalidParameterError(name, str(x), "a finite real number") from None
+        raise InvalidParameterError(name, str(x), valid) from None
     bad = ~np.isfinite(arr)
     if bad.any():
-        raise InvalidParameterError(name, arr[bad] if arr.ndim else arr, "a finite real number")
+        raise InvalidParameterError(name, arr[bad] if arr.ndim else arr, valid,
+                                    "NaN and infinity are not accepted")
     return arr
 
 
@@ -85,13 +89,13 @@ def check_range(name: str, x, lo=-math.inf, hi=math.inf, *, lo_open=False, hi_op
     Returns ``x`` as a float ndarray. The message states the interval in the form
     ``0 < nu <= 1``.
     """
-    arr = as_finite(name, x)
+    interval = _interval(name, lo, hi, lo_open, hi_open)
+    arr = as_finite(name, x, interval)
     below = arr <= lo if lo_open else arr < lo
     above = arr >= hi if hi_open else arr > hi
     bad = below | above
     if bad.any():
-        raise error(name, arr[bad] if arr.ndim else arr,
-                    _interval(name, lo, hi, lo_open, hi_open), reason)
+        raise error(name, arr[bad] if arr.ndim else arr, interval, reason)
     return arr
 
 
@@ -102,7 +106,7 @@ def check_positive(name: str, x, reason: str = "") -> np.ndarray:
 
 def check_fraction(name: str, x) -> np.ndarray:
     """Check a hematocrit-like volume fraction, ``0 <= x < 1`` (a fraction, not a percentage)."""
-    arr = as_finite(name, x)
+    arr = as_finite(name, x, f"0 <= {name} < 1")
     reason = "give a fraction, not a percentage" if np.any((arr >= 1) & (arr <= 100)) else ""
     return check_range(name, arr, 0.0, 1.0, hi_open=True, reason=reason)
 

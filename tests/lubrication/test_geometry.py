@@ -119,3 +119,15 @@ def test_error_messages_name_value_and_range():
         g.confinement_from_diameter(2.8, -4.0)
     with pytest.raises(InvalidParameterError, match=r"volume_fl="):
         g.cell_from_volume_area("ninety", 135.0)
+
+
+@given(volume=st.floats(10.0, 500.0), excess=st.floats(1.01, 2.0), diameter=st.floats(1.0, 20.0))
+def test_physical_units_are_consistent(volume, excess, diameter):
+    """d_c = 2 R0/lam_c, L_c = ell_c d_c/2, lam = 2 R0/d, and passing <=> d > d_c."""
+    area = (36 * math.pi * volume**2) ** (1 / 3) * excess      # larger than the sphere's
+    nu, R0 = g.cell_from_volume_area(volume, area)
+    d_c = g.critical_diameter_um(nu, R0)
+    assert d_c * g.critical_confinement(nu) / 2 == pytest.approx(R0, rel=1e-13)
+    assert g.critical_length_um(nu, R0) == pytest.approx(g.critical_length(nu) * d_c / 2, rel=1e-13)
+    lam = g.confinement_from_diameter(R0, diameter)
+    assert (lam < g.critical_confinement(nu)) == (diameter > d_c)
