@@ -46,6 +46,10 @@ ESTIMATE_ROWS = ("nu", "lam", "lam_c", "delta", "ell_c", "passes", "R0_um", "d_c
                  "discharge_hematocrit", "eta_rel")
 
 
+class UsageError(Exception):
+    """Options given in a combination the command does not accept (exit status 2)."""
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with the contract's one-line error and exit status 2."""
 
@@ -109,18 +113,16 @@ def _json_default(x):
 def cmd_geometry(args) -> dict:
     from lubrication import geometry as g
     if args.nu is not None and (args.volume_fl is not None or args.area_um2 is not None):
-        raise InvalidParameterError("nu", args.nu, "either --nu or --volume-fl/--area-um2, not both")
+        raise UsageError("give either --nu or --volume-fl/--area-um2, not both")
     if args.nu is None:
         if args.volume_fl is None or args.area_um2 is None:
-            raise InvalidParameterError("volume_fl", args.volume_fl,
-                                        "give --nu NU, or both --volume-fl and --area-um2")
+            raise UsageError("give --nu NU, or both --volume-fl V and --area-um2 A")
         nu, R0 = g.cell_from_volume_area(args.volume_fl, args.area_um2)
         lam = None if args.diameter_um is None else g.confinement_from_diameter(R0, args.diameter_um)
     else:
         nu, R0 = float(args.nu), None
         if args.diameter_um is not None:
-            raise InvalidParameterError("diameter_um", args.diameter_um,
-                                        "only with --volume-fl/--area-um2 (use --lam with --nu)")
+            raise UsageError("--diameter-um goes with --volume-fl/--area-um2; use --lam with --nu")
         lam = args.lam
     lam_c, ell_c = g.critical_confinement(nu), g.critical_length(nu)
     out = {"command": "geometry", "converged": True, "nu": nu, "lam_c": lam_c, "ell_c": ell_c,
@@ -134,7 +136,8 @@ def cmd_geometry(args) -> dict:
         if lam >= 1.0:
             out["nu_c"] = g.critical_reduced_volume(lam)
     units = {"R0_um": "um", "d_c_um": "um", "L_c_um": "um"}
-    rows = [(LABELS.get(k, k), v, units.get(k, "-"), "Chen et al. 2020 §III", "")
+    inputs = {"nu", "lam"} if R0 is None else set()
+    rows = [(LABELS.get(k, k), v, units.get(k, "-"), "input" if k in inputs else "Chen et al. 2020 §III", "")
             for k, v in out.items() if k not in ("command", "converged")]
     return out, format_rows(rows, "Geometry of confinement")
 
@@ -146,16 +149,15 @@ def cmd_estimate(args) -> dict:
                     "plasma_viscosity_mpas", "bending_modulus_j"))
     if args.nu is not None or args.lam is not None:
         if physical:
-            raise InvalidParameterError("nu", args.nu, "either --nu/--lam or physical inputs, not both")
+            raise UsageError("give either --nu/--lam or physical inputs (--volume-fl ...), not both")
         if args.nu is None or args.lam is None:
-            raise InvalidParameterError("lam" if args.lam is None else "nu", None,
-                                        "give both --nu and --lam for the dimensionless estimate")
+            raise UsageError("give both --nu and --lam for the dimensionless estimate")
         h = {f"{args.hematocrit_kind}_hematocrit": args.hematocrit} if args.hematocrit is not None else {}
         est = estimate_dimensionless(args.nu, args.lam, args.ca_b, extrapolate=args.extrapolate, **h)
         title = f"Dimensionless estimate: nu = {args.nu:g}, lam = {args.lam:g}"
     else:
         if args.ca_b is not None:
-            raise InvalidParameterError("ca_b", args.ca_b, "only with --nu/--lam (physical inputs set Ca_B)")
+            raise UsageError("--ca-b goes with --nu/--lam (physical inputs determine Ca_B)")
         kw = {k: getattr(args, k) for k in ("volume_fl", "area_um2", "diameter_um", "velocity_mm_s",
                                             "plasma_viscosity_mpas", "bending_modulus_j")
               if getattr(args, k) is not None}
@@ -194,8 +196,8 @@ def cmd_viscosity(args) -> dict:
     eta = v.relative_viscosity(d, h_d, law=law)
     out = {"command": "viscosity", "converged": True, "law": law, "diameter_um": d,
            "discharge_hematocrit": h_d, "tube_hematocrit": h_t, "eta_rel": eta,
-           "fahraeus_constants": args.constants if kind == "tube" else None}
-    rows = [("law", law, "", v.__name__, ""), ("diameter", d, "um", "input", ""),
+           "fahraeus_constants": args.constants}
+    rows = [("law", law, "", "", ""), ("diameter", d, "um", "input", ""),
             (LABELS["discharge_hematocrit"], h_d, "-", "input" if kind == "discharge" else
              f"Fahraeus ({args.constants})", ""),
             (LABELS["tube_hematocrit"], h_t, "-", "input" if kind == "tube" else
@@ -232,7 +234,7 @@ def _single_file_viscosity(args) -> dict:
            "dp_plus_R0": dp.value, "dp_plus_method": dp.method, "note": note,
            "cell": "RBC defaults (90 fL, 135 um^2)"}
     if note:
-        print(f"warning: {note}", file=sys.stderr)
+        out["warnings"] = [note]
     rows = [("law", out["law"], "", "", ""), ("diameter", args.diameter_um, "um", "input", ""),
             *_quantity_rows(est.quantities, ("tube_hematocrit", "discharge_hematocrit", "dp_plus_R0")),
             (LABELS["eta_rel"], eta, "-", "single-file (Chen 2020)",
@@ -244,8 +246,7 @@ def cmd_fahraeus(args) -> dict:
     from . import viscosity as v
     d = args.diameter_um
     if (args.discharge_hematocrit is None) == (args.tube_hematocrit is None):
-        raise InvalidParameterError("discharge_hematocrit", args.discharge_hematocrit,
-                                    "give exactly one of --discharge-hematocrit, --tube-hematocrit")
+        raise UsageError("give exactly one of --discharge-hematocrit H, --tube-hematocrit H")
     if args.discharge_hematocrit is not None:
         h_d = args.discharge_hematocrit
         h_t = v.tube_hematocrit_fahraeus(d, h_d, constants=args.constants)
@@ -267,7 +268,10 @@ def _save_plot(ax, path: str) -> None:
     directory = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(dir=directory, suffix=os.path.splitext(path)[1] or ".png")
     os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
     try:
+        os.chmod(tmp, 0o666 & ~umask)        # mkstemp makes 0600; a figure is an ordinary file
         ax.figure.savefig(tmp, dpi=150, bbox_inches="tight")
         os.replace(tmp, path)
     finally:
@@ -337,8 +341,9 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--diameter-um", type=float, required=True, help="tube diameter [um]")
     f.add_argument("--discharge-hematocrit", type=float, help="discharge hematocrit H_D, fraction [-]")
     f.add_argument("--tube-hematocrit", type=float, help="tube hematocrit H_T, fraction [-]")
-    f.add_argument("--constants", choices=("pries1990", "pries1992"), default="pries1990",
-                   help="fit constants (a, b) of the Fahraeus relation (default pries1990)")
+    f.add_argument("--constants", choices=("pries1990", "pries1992"), default="pries1992",
+                   help="fit constants (a, b) of the Fahraeus relation (default pries1992, as the "
+                        "viscosity command and the estimate)")
     common(f)
     f.set_defaults(func=cmd_fahraeus)
     return p
@@ -350,10 +355,11 @@ def main(argv=None) -> int:
         warnings.simplefilter("always", OutOfRangeWarning)
         try:
             out, human = args.func(args)
-        except InvalidParameterError as exc:
+        except (InvalidParameterError, UsageError) as exc:
             print(f"vesicle-tube {args.command}: error: {exc}", file=sys.stderr)
             return EXIT_INVALID
-    messages = [str(w.message) for w in caught if issubclass(w.category, OutOfRangeWarning)]
+    messages = out.get("warnings", []) + [str(w.message) for w in caught
+                                          if issubclass(w.category, OutOfRangeWarning)]
     for m in messages:
         print(f"warning: {m}", file=sys.stderr)
     if messages:

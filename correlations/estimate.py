@@ -26,8 +26,9 @@ import warnings
 from dataclasses import dataclass, field
 
 from lubrication.checks import (CannotPassError, InvalidParameterError, OutOfRangeWarning,
-                                check_choice, check_fraction, check_positive, check_range)
-from lubrication.geometry import (cell_from_volume_area, check_passes, critical_diameter_um,
+                                check_choice, check_fraction, check_positive)
+from lubrication.geometry import (cell_from_volume_area, check_passes, check_reduced_volume,
+                                  critical_diameter_um,
                                   critical_length, critical_length_um)
 
 from .registry import METHODS, QUANTITIES
@@ -51,7 +52,7 @@ RUPTURE_TENSION_MN_M = (3.0, 10.0)
 _SMALL_LAM, _NEAR_CRITICAL_DELTA = 0.5, 0.1
 
 _HEMATOCRIT_KEYS = ("tube_hematocrit", "discharge_hematocrit", "eta_rel")
-NO_HEMATOCRIT = "not computed: no hematocrit given"
+NO_HEMATOCRIT = "not computed: give a hematocrit (--hematocrit)"
 
 _UNITS = {
     "V_over_U": "-", "film": "h/R", "ell": "L/R", "dp_plus_R0": "dp+ R0/(eta U)",
@@ -130,6 +131,18 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool) -
     return Quantity(value, _UNITS[quantity], m.name, False, m.source, "EXTRAPOLATED; " + note)
 
 
+def _scaled(q: Quantity, factor: float, unit: str, times: Quantity | None = None) -> Quantity:
+    """``q`` (times ``times``) rescaled: a derived number inherits method, validity and note."""
+    parts = [q] if times is None else [q, times]
+    missing = [p for p in parts if p.value is None]
+    if missing:
+        return Quantity(None, unit, None, False, "", missing[0].note)
+    value = q.value * factor * (1.0 if times is None else times.value)
+    valid = all(p.valid for p in parts)
+    note = next((p.note for p in parts if p.note), "")
+    return Quantity(value, unit, q.method, valid, q.source, note)
+
+
 def _regime(lam: float, delta: float) -> str:
     if lam <= _SMALL_LAM:
         return f"small object (lam <= {_SMALL_LAM})"
@@ -180,14 +193,9 @@ def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapola
             (known if q.valid else extrapolated)[name] = q.value
     geometric = {k: Quantity(state[k], "-", "geometry (Chen 2020 §III)", True)
                  for k in ("lam_c", "ell_c", "delta")}
-    derived = {}
-    p = quantities["dp_plus_R0"]
-    if p.value is not None:
-        derived["dp_plus_R"] = Quantity(p.value / lam, "dp+ R/(eta U)", p.method, p.valid, p.source, p.note)
-    t, v = quantities["tension_front"], quantities["V_over_U"]
-    if t.value is not None and v.value is not None:
-        derived["tension_front_etaU"] = Quantity(t.value * v.value, "eta U", t.method,
-                                                 t.valid and v.valid, t.source)
+    derived = {"dp_plus_R": _scaled(quantities["dp_plus_R0"], 1.0 / lam, "dp+ R/(eta U)"),
+               "tension_front_etaU": _scaled(quantities["tension_front"], 1.0, "eta U",
+                                             quantities["V_over_U"])}
     return state, {"nu": Quantity(nu, "-", "input", True), "lam": Quantity(lam, "-", "input", True),
                    "passes": Quantity(True, "", "lam < lam_c", True),
                    **geometric, **quantities, **derived}
@@ -225,7 +233,7 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
     ('near-critical', 1.06, 'near_critical_barakat2018a')
     """
     hematocrits = _hematocrits(tube_hematocrit, discharge_hematocrit)
-    nu, lam = float(check_range("nu", nu, 0.0, 1.0, lo_open=True)), float(check_positive("lam", lam))
+    nu, lam = float(check_reduced_volume(nu)), float(check_positive("lam", lam))
     if ca_b is not None:
         ca_b = float(check_positive("ca_b", ca_b))
     state, quantities = _core(nu, lam, ca_b, hematocrits, None, extrapolate)
@@ -310,8 +318,9 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     lam = 2.0 * R0 / diameter_um
     R0_m, R_m = R0 * 1e-6, diameter_um / 2 * 1e-6
     ca_b = eta * U * R0_m**2 / kappa
-    hematocrits = {} if hematocrit is None else _hematocrits(
-        hematocrit if kind == "tube" else None, hematocrit if kind == "discharge" else None)
+    hematocrits = {}
+    if hematocrit is not None:
+        hematocrits[f"{kind}_hematocrit"] = float(check_fraction("hematocrit", hematocrit))
     state, q = _core(nu, lam, ca_b, hematocrits, diameter_um, extrapolate)
     inputs = {"volume_fl": float(volume_fl), "area_um2": float(area_um2), "diameter_um": diameter_um,
               "velocity_mm_s": U * 1e3, "plasma_viscosity_mpas": eta * 1e3, "bending_modulus_j": kappa,
@@ -320,27 +329,19 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     physical = {"R0_um": Quantity(R0, "um", geo, True), "d_c_um": Quantity(d_c, "um", geo, True),
                 "L_c_um": Quantity(critical_length_um(nu, R0), "um", geo, True),
                 "ca_b": Quantity(ca_b, "-", "eta U R0^2/kappa", True)}
-    scale = {"V_over_U": ("V_mm_s", U * 1e3, "mm/s"),
-             "dp_plus_R0": ("dp_plus_Pa", eta * U / R0_m, "Pa"),
-             "film": ("film_nm", R_m * 1e9, "nm"),
-             "ell": ("length_um", R_m * 1e6, "um")}
-    for key, (new, factor, unit) in scale.items():
-        src = q[key]
-        physical[new] = Quantity(None if src.value is None else src.value * factor, unit,
-                                 src.method, src.valid, src.source, src.note)
-    t, v = q["tension_front"], q["V_over_U"]
-    if t.value is not None and v.value is not None:
-        physical["tension_front_mN_m"] = Quantity(t.value * eta * v.value * U * 1e3, "mN/m",
-                                                  t.method, t.valid and v.valid, t.source)
-    else:
-        physical["tension_front_mN_m"] = Quantity(None, "mN/m", None, False, "",
-                                                  "needs tension_front and V_over_U")
+    physical.update(V_mm_s=_scaled(q["V_over_U"], U * 1e3, "mm/s"),
+                    dp_plus_Pa=_scaled(q["dp_plus_R0"], eta * U / R0_m, "Pa"),
+                    film_nm=_scaled(q["film"], R_m * 1e9, "nm"),
+                    length_um=_scaled(q["ell"], R_m * 1e6, "um"),
+                    # gamma_F = (gamma_F/(eta V)) eta (V/U) U, in mN/m
+                    tension_front_mN_m=_scaled(q["tension_front"], eta * U * 1e3, "mN/m", q["V_over_U"]))
     notes = list(_notes(q, ca_b))
-    tension = physical["tension_front_mN_m"].value
-    if tension is not None:
+    tension = physical["tension_front_mN_m"]
+    if tension.value is not None:
         lo, hi = RUPTURE_TENSION_MN_M
-        verdict = ("below" if tension < lo else "within" if tension <= hi else "ABOVE")
-        notes.append(f"Front tension {tension:.3g} mN/m is {verdict} the bilayer rupture range "
-                     f"{lo:g}-{hi:g} mN/m.")
+        verdict = ("below" if tension.value < lo else "within" if tension.value <= hi else "ABOVE")
+        flag = "" if tension.valid else " (EXTRAPOLATED value)"
+        notes.append(f"Front tension {tension.value:.3g} mN/m{flag} is {verdict} the bilayer rupture "
+                     f"range {lo:g}-{hi:g} mN/m.")
     return Estimate(inputs=inputs, quantities={**q, **physical}, regime=_regime(lam, state["delta"]),
                     notes=tuple(notes), provenance=_provenance())

@@ -10,7 +10,6 @@ thickness" (eq. sfilm2, eq. sfilm4, fig. film, fig. film_Ca) and appendix (eq. t
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from lubrication.checks import ValidityRange, check_positive, check_range, scalar_or_array
-from lubrication.geometry import check_passes, critical_confinement
+from lubrication.geometry import check_passes, check_reduced_volume
 
 __all__ = [
     "TRANSITION_RANGE_CHEN2020",
@@ -51,11 +51,6 @@ SHAPE_CLASS_RANGE_CHEN2020 = ValidityRange.of(
 # deflated vesicles, so nu runs from the most deflated simulated (0.6) to 1.
 LENGTH_RANGE_CHEN2020 = ValidityRange.of("Chen et al. 2020 eq. sL", nu=(0.6, 1.0),
                                          delta=(0.0, 0.1))
-
-
-def _check_nu(nu) -> np.ndarray:
-    return check_range("nu", nu, 0.0, 1.0, lo_open=True,
-                       reason="the reduced volume of a closed surface is at most 1 (sphere)")
 
 
 def transition_reduced_volume_chen2020(lam):
@@ -118,7 +113,7 @@ def transition_confinement_chen2020(nu):
     >>> round(transition_confinement_chen2020(0.6), 4)
     1.8138
     """
-    nu = _check_nu(nu)
+    nu = check_reduced_volume(nu)
     lam_T = (_A - nu) / _B
     TRANSITION_RANGE_CHEN2020.warn_outside("transition_confinement_chen2020", nu=nu, lam=lam_T)
     return scalar_or_array(lam_T)

@@ -36,7 +36,7 @@ import math
 
 import numpy as np
 
-from .checks import ValidityRange, check_range, scalar_or_array
+from .checks import ValidityRange, scalar_or_array
 from .geometry import check_passes, critical_confinement
 
 __all__ = [

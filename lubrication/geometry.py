@@ -39,9 +39,17 @@ __all__ = [
 ]
 
 
-def _check_nu(nu) -> np.ndarray:
-    return check_range("nu", nu, 0.0, 1.0, lo_open=True,
+#: Smallest reduced volume accepted. Below it ell_c ~ nu^(-2) overflows double precision long
+#: before any physical relevance (red cells: nu ~ 0.6; strongly deflated vesicles: nu ~ 0.3).
+NU_MIN = 1e-6
+
+
+def check_reduced_volume(nu) -> np.ndarray:
+    """Check ``NU_MIN <= nu <= 1`` (a closed surface encloses at most a sphere's volume)."""
+    return check_range("nu", nu, NU_MIN, 1.0,
                        reason="the reduced volume of a closed surface is at most 1 (sphere)")
+
+
 
 
 def critical_confinement(nu):
@@ -71,7 +79,7 @@ def critical_confinement(nu):
     >>> critical_confinement([1.0, 0.9])
     array([1.        , 1.32385897])
     """
-    nu = _check_nu(nu)
+    nu = check_reduced_volume(nu)
     a = nu ** (-2.0 / 3.0)
     # Viete: shifting lambda = t + a/2 gives t^3 - (3a^2/4) t + (1/2 - a^3/4) = 0, whose largest
     # root is t = a cos(theta/3) with cos(theta) = 1 - 2 nu^2, i.e. theta = 2 arcsin(nu).
@@ -127,7 +135,7 @@ def critical_length(nu):
     >>> critical_length(1.0)
     2.0
     """
-    nu = _check_nu(nu)
+    nu = check_reduced_volume(nu)
     return scalar_or_array(2.0 * nu ** (-2.0 / 3.0) * np.asarray(critical_confinement(nu)) ** 2)
 
 
@@ -141,7 +149,7 @@ def check_passes(nu, lam):
         i = np.flatnonzero(bad.ravel())[0]
         raise CannotPassError(
             "lam", lam_b.ravel()[i], f"0 < lam < lam_c={lam_c_b.ravel()[i]:.6g}",
-            f"lam >= lam_c(nu): the vesicle cannot pass this tube intact")
+            "lam >= lam_c(nu): the vesicle cannot pass this tube intact")
     return scalar_or_array(lam_c)
 
 
@@ -218,16 +226,20 @@ def reduced_volume(volume, area):
     >>> round(reduced_volume(90.0, 135.0), 4)
     0.6102
     """
-    volume = check_positive("volume", volume)
-    area = check_positive("area", area)
+    return _reduced_volume(volume, area, "volume", "area")
+
+
+def _reduced_volume(volume, area, volume_name, area_name):
+    volume = check_positive(volume_name, volume)
+    area = check_positive(area_name, area)
     nu = 6.0 * math.sqrt(math.pi) * volume * area ** -1.5
     # Round-off tolerance: a sphere computed from its own volume may land at 1 + 1e-15.
     if np.any(nu > 1.0 + 1e-12):
         sphere = np.broadcast_to((36.0 * math.pi * volume**2) ** (1.0 / 3.0), np.shape(nu))
         bad = np.flatnonzero(np.ravel(nu > 1.0 + 1e-12))[0]
         raise InvalidParameterError(
-            "area", np.ravel(np.broadcast_to(area, np.shape(nu)))[bad],
-            f"area >= {sphere.ravel()[bad]:.6g} (the sphere of the same volume)",
+            area_name, np.ravel(np.broadcast_to(area, np.shape(nu)))[bad],
+            f"{area_name} >= {sphere.ravel()[bad]:.6g} (the sphere of the same volume)",
             "a closed membrane cannot enclose more than a sphere of equal area")
     return scalar_or_array(np.minimum(nu, 1.0))
 
@@ -240,7 +252,7 @@ def reduced_area_excess(nu):
     >>> round(reduced_area_excess(0.6), 4)
     5.0984
     """
-    nu = _check_nu(nu)
+    nu = check_reduced_volume(nu)
     return scalar_or_array(4.0 * math.pi * (nu ** (-2.0 / 3.0) - 1.0))
 
 
@@ -260,9 +272,8 @@ def cell_from_volume_area(volume_fl, area_um2):
     >>> round(nu, 3), round(R0, 3)
     (0.61, 2.78)
     """
-    volume_fl = check_positive("volume_fl", volume_fl)
-    area_um2 = check_positive("area_um2", area_um2)
-    return reduced_volume(volume_fl, area_um2), volume_radius(volume_fl)
+    return (_reduced_volume(volume_fl, area_um2, "volume_fl", "area_um2"),
+            volume_radius(check_positive("volume_fl", volume_fl)))
 
 
 def confinement_from_diameter(R0_um, diameter_um):

@@ -13,8 +13,8 @@ import numpy as np
 
 from .asymptotics import (NEAR_CRITICAL_RANGE, SMALL_SPHERE_RANGE, dp_plus_near_critical,
                           dp_plus_small_sphere, speed_near_critical, speed_small_sphere)
-from .checks import OutOfRangeWarning, check_range
-from .geometry import critical_confinement
+from .checks import OutOfRangeWarning
+from .geometry import check_reduced_volume, critical_confinement
 
 __all__ = ["plot_speed_asymptotics", "plot_dp_plus_asymptotics"]
 
@@ -29,7 +29,7 @@ def _new_axes(ax):
 
 
 def _draw(ax, nu, law, ylabel, log):
-    nu = np.atleast_1d(check_range("nu", nu, 0.0, 1.0, lo_open=True))
+    nu = np.atleast_1d(check_reduced_volume(nu))
     # Small-sphere law: up to lam = 0.6, solid inside its range (lam <= 0.5).
     (lam_hi,) = [hi for name, lo, hi in SMALL_SPHERE_RANGE.bounds if name == "lam"]
     lam_in = np.linspace(0.02, lam_hi, 100)

@@ -1,0 +1,388 @@
+"""The ``vesicle-tube`` command line against its contract (module docstring of correlations.cli).
+
+Contract: a table with units for people; ``--json`` prints exactly one JSON object on stdout;
+exit 0 on success, 2 on invalid input with ONE line on stderr naming the parameter, its value and
+the valid range (no traceback); out-of-range warnings go to stderr as ``warning:`` lines and into
+the JSON under ``"warnings"``. Commands run in-process through ``main(argv)``; one test runs the
+installed console script.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from correlations.cli import main
+from correlations.viscosity import relative_viscosity
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+ESTIMATE_KEYS = ("nu", "lam", "lam_c", "ell_c", "delta", "V_over_U", "dp_plus_R0", "dp_plus_R",
+                 "eta_rel", "tube_hematocrit", "discharge_hematocrit", "d_c_um", "L_c_um", "R0_um",
+                 "passes")
+
+
+def _reject_constant(name):
+    raise ValueError(f"not strict JSON: {name}")
+
+
+def strict_json(text: str) -> dict:
+    """Parse stdout as exactly one JSON object (no NaN/Infinity, nothing before or after)."""
+    obj = json.loads(text, parse_constant=_reject_constant)
+    assert isinstance(obj, dict)
+    return obj
+
+
+def run(capsys, *argv):
+    """Run the CLI in-process; return (exit code, stdout, stderr)."""
+    try:
+        code = main(list(argv))
+    except SystemExit as exc:            # argparse errors exit through SystemExit
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def ref_lam_c(nu):
+    """Largest real root of 2x^3 - 3 nu^(-2/3) x^2 + 1 (numpy.roots + one Newton step)."""
+    a = nu ** (-2.0 / 3.0)
+    x = float(max(r.real for r in np.roots([2.0, -3.0 * a, 0.0, 1.0]) if abs(r.imag) < 1e-9))
+    return x - (2.0 * x**3 - 3.0 * a * x**2 + 1.0) / (6.0 * x * x - 6.0 * a * x)
+
+
+def ref_fahraeus_tube(d, hd, a, b):
+    """H_T/H_D = H_D + (1 - H_D)(1 + 1.7 e^(-aD) - 0.6 e^(-bD)) (physics-notes §6)."""
+    return hd * (hd + (1.0 - hd) * (1.0 + 1.7 * math.exp(-a * d) - 0.6 * math.exp(-b * d)))
+
+
+FAHRAEUS_AB = {"pries1990": (0.415, 0.011), "pries1992": (0.35, 0.01)}
+
+
+# ------------------------------------------------------------------------------------------
+# Every command: exit 0, a table with units, one JSON object with the fixed keys.
+# ------------------------------------------------------------------------------------------
+
+COMMANDS = {   # name: (argv, JSON keys that must be present, units the table must show)
+    "estimate": (["estimate", "--diameter-um", "3", "--hematocrit", "0.3"], ESTIMATE_KEYS,
+                 ("um", "mm/s", "Pa", "nm", "mN/m", "dp+ R0/(eta U)")),
+    "estimate-dimensionless": (["estimate", "--nu", "0.9", "--lam", "1.25", "--hematocrit", "0.3"],
+                               ESTIMATE_KEYS[:-4] + ("passes",),
+                               ("dp+ R0/(eta U)", "dp+ R/(eta U)", "h/R", "L/R", "eta V")),
+    "geometry": (["geometry", "--volume-fl", "90", "--area-um2", "135", "--diameter-um", "4"],
+                 ("nu", "lam", "lam_c", "ell_c", "delta", "d_c_um", "L_c_um", "R0_um", "passes"),
+                 ("um",)),
+    "geometry-nu": (["geometry", "--nu", "0.6", "--lam", "1.9"],
+                    ("nu", "lam", "lam_c", "ell_c", "delta", "passes"), ("-",)),
+    "viscosity": (["viscosity", "--diameter-um", "6", "--hematocrit", "0.45"],
+                  ("eta_rel", "tube_hematocrit", "discharge_hematocrit"), ("um",)),
+    "viscosity-single-file": (["viscosity", "--diameter-um", "3", "--hematocrit", "0.45",
+                               "--law", "single-file"],
+                              ("eta_rel", "tube_hematocrit", "discharge_hematocrit", "dp_plus_R0"),
+                              ("um", "dp+ R0/(eta U)")),
+    "fahraeus": (["fahraeus", "--diameter-um", "10", "--discharge-hematocrit", "0.45"],
+                 ("tube_hematocrit", "discharge_hematocrit"), ("um",)),
+}
+
+
+def _unit_column(table: str) -> set:
+    """The entries of the 'unit' column of a format_rows table."""
+    lines = table.splitlines()
+    head = next(i for i, line in enumerate(lines) if line.startswith("quantity"))
+    start = lines[head].index("unit")
+    end = lines[head].index("method")
+    return {line[start:end].strip() for line in lines[head + 2:] if len(line) > start}
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_human_table_with_units(capsys, name):
+    argv, _, units = COMMANDS[name]
+    code, out, err = run(capsys, *argv)
+    assert code == 0, err
+    assert err == ""
+    assert "{" not in out                  # a table, not JSON
+    column = _unit_column(out)
+    for unit in units:
+        assert unit in column or re.search(rf"\b{re.escape(unit)}\b", out.splitlines()[0]), (unit, column)
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_json_is_one_object_with_the_fixed_keys(capsys, name):
+    argv, keys, _ = COMMANDS[name]
+    code, out, err = run(capsys, *argv, "--json")
+    assert code == 0, err
+    obj = strict_json(out)
+    assert obj["converged"] is True
+    assert obj["command"] == argv[0]
+    missing = [k for k in keys if k not in obj]
+    assert not missing, missing
+    assert all(k == k.strip() and " " not in k and "-" not in k for k in obj)   # snake_case keys
+
+
+def test_estimate_default_json_values(capsys):
+    code, out, _ = run(capsys, "estimate", "--json")
+    obj = strict_json(out)
+    assert code == 0 and obj["passes"] is True and obj["V_over_U"] is None
+    nu = 6.0 * math.sqrt(math.pi) * 90.0 * 135.0 ** -1.5
+    assert obj["nu"] == pytest.approx(nu, rel=1e-12)
+    assert obj["lam_c"] == pytest.approx(ref_lam_c(nu), rel=1e-12)
+    for k in ESTIMATE_KEYS:
+        if k != "dp_plus_R":
+            assert k in obj, k
+
+
+def test_estimate_default_json_has_every_fixed_key(capsys):
+    _, out, _ = run(capsys, "estimate", "--json")
+    obj = strict_json(out)
+    assert [k for k in ESTIMATE_KEYS if k not in obj] == []
+
+
+def test_installed_console_script():
+    exe = Path(sys.executable).with_name("vesicle-tube")
+    exe = str(exe) if exe.exists() else shutil.which("vesicle-tube")
+    assert exe, "console script vesicle-tube not installed"
+    proc = subprocess.run([exe, "estimate", "--json"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    obj = strict_json(proc.stdout)
+    assert obj["command"] == "estimate" and obj["converged"] is True
+    assert "Traceback" not in proc.stderr
+
+
+# ------------------------------------------------------------------------------------------
+# Invalid input: exit 2, one line on stderr naming parameter, value and range; nothing on stdout.
+# ------------------------------------------------------------------------------------------
+
+INVALID = {
+    "lam-beyond-critical": (["estimate", "--nu", "0.6", "--lam", "2.5"],
+                            ("lam", "2.5", "lam_c", "cannot pass")),
+    "tube-below-d_c": (["estimate", "--diameter-um", "2"], ("diameter_um", "2", "d_c", "cannot pass")),
+    "nu-above-1": (["geometry", "--nu", "1.5"], ("nu", "1.5", "1e-06 <= nu <= 1")),
+    "negative-diameter": (["viscosity", "--diameter-um", "-3", "--hematocrit", "0.4"],
+                          ("diameter_um", "-3", "diameter_um > 0")),
+    "hematocrit-in-percent": (["viscosity", "--diameter-um", "6", "--hematocrit", "45"],
+                              ("hematocrit", "45", "< 1", "fraction")),
+    "unknown-law": (["viscosity", "--diameter-um", "6", "--hematocrit", "0.4", "--law", "bogus"],
+                    ("--law", "bogus", "pries1992", "single-file")),
+    "fahraeus-no-hematocrit": (["fahraeus", "--diameter-um", "10"],
+                               ("hematocrit", "--discharge-hematocrit", "--tube-hematocrit")),
+    "nan-hematocrit": (["estimate", "--hematocrit", "nan"], ("hematocrit", "nan", "0 <= ", "< 1")),
+    "inf-volume": (["estimate", "--volume-fl", "inf"], ("volume_fl", "inf")),
+    "zero-velocity": (["estimate", "--velocity-mm-s", "0"], ("velocity_mm_s", "0", "> 0")),
+    "negative-ca_b": (["estimate", "--nu", "0.9", "--lam", "1.2", "--ca-b", "-1"], ("ca_b", "-1", "> 0")),
+    "nu-and-physical": (["estimate", "--nu", "0.6", "--lam", "1.9", "--diameter-um", "3"], ("nu",)),
+    "geometry-lam-zero": (["geometry", "--nu", "0.6", "--lam", "0"], ("lam", "0", "lam > 0")),
+    "fahraeus-hematocrit-percent": (["fahraeus", "--diameter-um", "10", "--tube-hematocrit", "30"],
+                                    ("tube_hematocrit", "30")),
+    "bad-kind": (["estimate", "--hematocrit", "0.3", "--hematocrit-kind", "both"],
+                 ("--hematocrit-kind", "both")),
+    "not-a-number": (["geometry", "--nu", "abc"], ("--nu", "abc")),
+    "no-command": ([], ("command",)),
+}
+
+
+@pytest.mark.parametrize("name", INVALID)
+def test_invalid_input_exits_2_with_one_line(capsys, name):
+    argv, needles = INVALID[name]
+    code, out, err = run(capsys, *argv)
+    assert code == 2
+    assert out == ""
+    lines = err.strip("\n").splitlines()
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    assert "error" in lines[0]
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])
+
+
+def test_invalid_input_with_json_still_exits_2_and_prints_nothing(capsys):
+    code, out, err = run(capsys, "estimate", "--diameter-um", "2", "--json")
+    assert (code, out, len(err.strip().splitlines())) == (2, "", 1)
+
+
+@pytest.mark.parametrize("argv", [["fahraeus", "--diameter-um", "10"], ["geometry"],
+                                  ["estimate", "--nu", "0.6"]])
+def test_missing_parameter_is_not_reported_as_nan(capsys, argv):
+    code, _, err = run(capsys, *argv)
+    assert code == 2
+    assert "=nan" not in err
+
+
+def test_too_small_area_names_the_option(capsys):
+    code, _, err = run(capsys, "estimate", "--area-um2", "50")
+    assert code == 2
+    assert "area_um2" in err or "--area-um2" in err
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")   # fail on the output, not the overflow warning
+def test_tiny_reduced_volume_gives_strict_json_or_exit_2(capsys):
+    code, out, _ = run(capsys, "geometry", "--nu", "1e-300", "--json")
+    if code == 0:
+        strict_json(out)
+    else:
+        assert code == 2
+
+
+# ------------------------------------------------------------------------------------------
+# Viscosity laws and the Fåhræus round trip.
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("law", ["pries1992", "pries1994", "pries2005"])
+def test_viscosity_names_the_pries_law(capsys, law):
+    code, out, _ = run(capsys, "viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--law", law)
+    assert code == 0 and law in out
+    code, out, _ = run(capsys, "viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--law", law,
+                       "--json")
+    obj = strict_json(out)
+    assert obj["law"] == law
+    assert obj["eta_rel"] == pytest.approx(relative_viscosity(6.0, 0.45, law), rel=1e-12)
+
+
+def test_viscosity_tube_hematocrit_is_converted_with_fahraeus(capsys):
+    _, out, _ = run(capsys, "viscosity", "--diameter-um", "6", "--hematocrit", "0.3",
+                    "--hematocrit-kind", "tube", "--json")
+    obj = strict_json(out)
+    a, b = FAHRAEUS_AB["pries1992"]
+    assert obj["tube_hematocrit"] == 0.3
+    assert ref_fahraeus_tube(6.0, obj["discharge_hematocrit"], a, b) == pytest.approx(0.3, rel=1e-12)
+    assert obj["eta_rel"] == pytest.approx(relative_viscosity(6.0, obj["discharge_hematocrit"]), rel=1e-12)
+
+
+def test_viscosity_single_file_in_its_range(capsys):
+    """RBC in a 3 µm tube: Chen et al. single-file law with the estimate's dp+."""
+    code, out, _ = run(capsys, "viscosity", "--diameter-um", "3", "--hematocrit", "0.3",
+                       "--hematocrit-kind", "tube", "--law", "single-file")
+    assert code == 0 and "single-file" in out
+    _, out, _ = run(capsys, "viscosity", "--diameter-um", "3", "--hematocrit", "0.3",
+                    "--hematocrit-kind", "tube", "--law", "single-file", "--json")
+    obj = strict_json(out)
+    assert "single-file" in obj["law"] and obj["valid"] is True
+    R0 = (3.0 * 90.0 / (4.0 * math.pi)) ** (1.0 / 3.0)
+    lam = 2.0 * R0 / 3.0
+    expected = 1.0 + 3.0 / 32.0 * lam**-4 * obj["dp_plus_R0"] * 0.3
+    assert obj["eta_rel"] == pytest.approx(expected, rel=1e-12)
+
+
+def test_viscosity_single_file_outside_its_range_gives_no_other_law(capsys):
+    """6 µm: no valid dp+ for an RBC, so no single-file value (and never Pries's)."""
+    code, out, err = run(capsys, "viscosity", "--diameter-um", "6", "--hematocrit", "0.45",
+                         "--law", "single-file", "--json")
+    obj = strict_json(out)
+    assert code == 0
+    assert obj["eta_rel"] is None and obj["valid"] is False
+    assert "single-file" in obj["law"]
+    assert err.startswith("warning:")
+
+
+@pytest.mark.parametrize("constants", ["pries1990", "pries1992"])
+@pytest.mark.parametrize("diameter", ["5", "10", "100"])
+def test_fahraeus_round_trip(capsys, constants, diameter):
+    _, out, _ = run(capsys, "fahraeus", "--diameter-um", diameter, "--discharge-hematocrit", "0.45",
+                    "--constants", constants, "--json")
+    forward = strict_json(out)
+    a, b = FAHRAEUS_AB[constants]
+    assert forward["tube_hematocrit"] == pytest.approx(ref_fahraeus_tube(float(diameter), 0.45, a, b),
+                                                       rel=1e-12)
+    _, out, _ = run(capsys, "fahraeus", "--diameter-um", diameter, "--tube-hematocrit",
+                    repr(forward["tube_hematocrit"]), "--constants", constants, "--json")
+    back = strict_json(out)
+    assert back["discharge_hematocrit"] == pytest.approx(0.45, rel=1e-12, abs=1e-12)
+
+
+# ------------------------------------------------------------------------------------------
+# Out-of-range warnings.
+# ------------------------------------------------------------------------------------------
+
+def _warning_lines(err):
+    return [line for line in err.splitlines() if line.startswith("warning:")]
+
+
+def test_out_of_range_viscosity_warns_on_stderr_and_in_json(capsys):
+    code, out, err = run(capsys, "viscosity", "--diameter-um", "2000", "--hematocrit", "0.45", "--json")
+    assert code == 0
+    obj = strict_json(out)
+    lines = _warning_lines(err)
+    assert lines and len(lines) == len(err.strip().splitlines())
+    assert isinstance(obj["warnings"], list) and obj["warnings"]
+    assert [f"warning: {w}" for w in obj["warnings"]] == lines
+    assert all("2000" in w for w in obj["warnings"])
+    code, out, err = run(capsys, "viscosity", "--diameter-um", "2000", "--hematocrit", "0.45")
+    assert code == 0 and _warning_lines(err) and "warnings" not in out
+
+
+@pytest.mark.parametrize("argv", [
+    ["fahraeus", "--diameter-um", "2", "--discharge-hematocrit", "0.45"],
+    ["viscosity", "--diameter-um", "12", "--hematocrit", "0.45", "--law", "single-file",
+     "--extrapolate"],
+    pytest.param(["viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--law", "single-file"], id="single-file-no-dp"),
+])
+def test_every_stderr_warning_is_in_the_json(capsys, argv):
+    code, out, err = run(capsys, *argv, "--json")
+    assert code == 0
+    lines = _warning_lines(err)
+    assert lines
+    assert [f"warning: {w}" for w in strict_json(out).get("warnings", [])] == lines
+
+
+# ------------------------------------------------------------------------------------------
+# Plots.
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("argv", [["estimate", "--diameter-um", "3"],
+                                  ["viscosity", "--diameter-um", "6", "--hematocrit", "0.45"]],
+                         ids=["estimate", "viscosity"])
+def test_plot_writes_a_png_atomically(capsys, tmp_path, argv):
+    target = tmp_path / "figure.png"
+    code, out, err = run(capsys, *argv, "--plot", str(target), "--json")
+    assert code == 0, err
+    strict_json(out)                       # the figure message goes to stderr, not stdout
+    data = target.read_bytes()
+    assert len(data) > 1000 and data.startswith(PNG_SIGNATURE)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["figure.png"]
+
+
+def test_plot_file_permissions_follow_the_umask(capsys, tmp_path):
+    old = os.umask(0o022)
+    try:
+        run(capsys, "viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--plot",
+            str(tmp_path / "eta.png"))
+    finally:
+        os.umask(old)
+    assert (tmp_path / "eta.png").stat().st_mode & 0o777 == 0o644
+
+
+# ------------------------------------------------------------------------------------------
+# geometry.
+# ------------------------------------------------------------------------------------------
+
+def test_geometry_cell_that_cannot_pass(capsys):
+    code, out, _ = run(capsys, "geometry", "--volume-fl", "90", "--area-um2", "135", "--diameter-um",
+                       "2", "--json")
+    obj = strict_json(out)
+    assert code == 0
+    assert obj["passes"] is False
+    R0 = (3.0 * 90.0 / (4.0 * math.pi)) ** (1.0 / 3.0)
+    nu = 6.0 * math.sqrt(math.pi) * 90.0 * 135.0 ** -1.5
+    assert obj["lam"] == pytest.approx(R0, rel=1e-12)          # lam = 2 R0 / 2 µm
+    assert obj["d_c_um"] == pytest.approx(2.0 * R0 / ref_lam_c(nu), rel=1e-12)
+
+
+def test_geometry_clearance(capsys):
+    code, out, _ = run(capsys, "geometry", "--nu", "0.6", "--lam", "1.9", "--json")
+    obj = strict_json(out)
+    assert code == 0 and obj["passes"] is True
+    lam_c = ref_lam_c(0.6)
+    assert obj["lam_c"] == pytest.approx(lam_c, rel=1e-12)
+    assert obj["delta"] == pytest.approx(1.0 - 1.9 / lam_c, rel=1e-12)
+
+
+def test_viscosity_json_names_the_fahraeus_constants_it_used(capsys):
+    _, out, _ = run(capsys, "viscosity", "--diameter-um", "10", "--hematocrit", "0.45", "--json")
+    assert strict_json(out)["fahraeus_constants"] == "pries1992"
