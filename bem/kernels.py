@@ -1,0 +1,395 @@
+r"""Numba back-end of the axisymmetric Stokes BEM: elliptic integrals, the ring Stokeslet, and
+the assembly of the single-layer influence matrix of a panel set on a set of targets.
+
+Everything here is ``@numba.njit(cache=True)`` and does no validation, no I/O and uses no
+globals (the user API in :mod:`bem.quadrature`, :mod:`bem.assembly` and :mod:`bem.solve`
+checks the inputs). Kernels of one family share one signature:
+
+* pointwise elliptic integrals ``f(m1) -> float`` of the complementary parameter ``m1 = 1 - m``;
+* pointwise ring Stokeslet ``ring_stokeslet(x0, r0, x, r) -> (Mxx, Mxr, Mrx, Mrr)``;
+* influence kernels ``f(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, out)``
+  (see :func:`influence_matrix`).
+
+Normalisation (Pozrikidis 1992, *Boundary integral and singularity methods*, §2.4):
+:math:`M_{\alpha\beta}(x_0, r_0; x, r) = r\int_0^{2\pi} G_{\alpha\beta'}\,d\varphi` with the
+free-space Stokeslet :math:`G_{ij} = \delta_{ij}/\rho + \hat x_i \hat x_j/\rho^3`, so a ring
+density ``q`` (force per unit *area* exerted on the fluid) along a generating curve with arc
+length ``l`` produces :math:`u_\alpha(x_0) = (8\pi\eta)^{-1}\int M_{\alpha\beta} q_\beta\,dl`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+__all__ = [
+    "ellipe_m1",
+    "ellipk_m1",
+    "ellipke_m1",
+    "influence_matrix",
+    "panel_integral",
+    "ring_stokeslet",
+    "ring_stokeslet_phi",
+]
+
+_PI = math.pi
+_LN4 = math.log(4.0)
+
+
+# --------------------------------------------------------------------------------------------
+# Complete elliptic integrals K(m), E(m) as functions of m1 = 1 - m
+# --------------------------------------------------------------------------------------------
+@numba.njit(cache=True)
+def _ke_series_m1(m1):
+    """K and E for small m1 by the logarithmic series about m = 1 (Byrd & Friedman 900.05/07).
+
+    K = sum_n a_n m1^n (L - b_n), E = 1 + sum_{n>=1} c_n m1^n (L - d_n), L = ln(4/sqrt(m1)),
+    a_n = [(1/2)_n/n!]^2, c_n = [(1/2)_n/n!][(1/2)_{n-1}/(n-1)!],
+    b_n = 2 sum_{j<=n} 1/((2j-1)2j), d_n = b_{n-1} + 1/((2n-1)2n). Terms fall like m1^n.
+    """
+    L = _LN4 - 0.5 * math.log(m1)
+    K = L
+    E = 1.0
+    g = 1.0          # (1/2)_n / n!
+    b = 0.0          # b_n
+    p = m1           # m1^n
+    for n in range(1, 40):
+        g_prev = g
+        g = g * (n - 0.5) / n
+        t = 1.0 / ((2.0 * n - 1.0) * (2.0 * n))
+        d = b + t
+        b = b + 2.0 * t
+        dK = g * g * p * (L - b)
+        dE = g * g_prev * p * (L - d)
+        K += dK
+        E += dE
+        if abs(dK) < 1e-17 * K and abs(dE) < 1e-17 * E:
+            break
+        p *= m1
+    return K, E
+
+
+@numba.njit(cache=True)
+def _ke_agm(m1):
+    """K and E by the arithmetic-geometric mean started from b0 = sqrt(m1) (no 1 - m)."""
+    a = 1.0
+    b = math.sqrt(m1)
+    s = 0.5 * (1.0 + m1)       # 1 - c0^2/2 with c0^2 = m = 1 - m1, formed without cancellation
+    w = 0.5
+    for _ in range(40):
+        c = 0.5 * (a - b)
+        w *= 2.0
+        s -= w * c * c
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+        if abs(a - b) <= 1e-16 * a:
+            break
+    K = 0.5 * _PI / a
+    return K, K * s
+
+
+@numba.njit(cache=True)
+def ellipke_m1(m1):
+    """Complete elliptic integrals (K(m), E(m)) of parameter m = 1 - m1, from m1 in (0, 1].
+
+    Relative accuracy ~1e-15 for all m1, including m1 -> 0 where K ~ ln(4/sqrt(m1)).
+    """
+    # Below m1 = 0.05 the log series needs <= 12 terms; above it the AGM's E = K*s loses less
+    # than one digit to cancellation (s is not small).
+    if m1 < 0.05:
+        return _ke_series_m1(m1)
+    return _ke_agm(m1)
+
+
+@numba.njit(cache=True)
+def ellipk_m1(m1):
+    """K(m) of parameter m = 1 - m1 (the analogue of ``scipy.special.ellipkm1``)."""
+    return ellipke_m1(m1)[0]
+
+
+@numba.njit(cache=True)
+def ellipe_m1(m1):
+    """E(m) of parameter m = 1 - m1."""
+    return ellipke_m1(m1)[1]
+
+
+# --------------------------------------------------------------------------------------------
+# Ring Stokeslet
+# --------------------------------------------------------------------------------------------
+@numba.njit(cache=True)
+def ring_stokeslet_phi(x0, r0, x, r, n):
+    """Ring Stokeslet by the trapezoidal rule in the azimuth with ``n`` intervals on [0, pi].
+
+    The integrand is even, periodic and analytic; the error falls like
+    exp(-2 n arccosh(2/m - 1)), so n = 8 gives machine precision for m <= 0.1. Accurate in
+    absolute terms near the axis, where the elliptic form cancels.
+    """
+    xh = x0 - x
+    xh2 = xh * xh
+    c0 = xh2 + r0 * r0 + r * r
+    sxx = 0.0
+    sxr = 0.0
+    srx = 0.0
+    srr = 0.0
+    h = _PI / n
+    for i in range(n + 1):
+        phi = i * h
+        c = math.cos(phi)
+        rho2 = c0 - 2.0 * r * r0 * c
+        rho = math.sqrt(rho2)
+        i1 = 1.0 / rho
+        i3 = i1 / rho2
+        wgt = 0.5 if (i == 0 or i == n) else 1.0
+        sxx += wgt * (i1 + xh2 * i3)
+        sxr += wgt * (r0 * c - r) * i3
+        srx += wgt * (r0 - r * c) * i3
+        srr += wgt * (c * i1 + (r0 - r * c) * (r0 * c - r) * i3)
+    f = 2.0 * h * r
+    return f * sxx, f * xh * sxr, f * xh * srx, f * srr
+
+
+@numba.njit(cache=True)
+def ring_stokeslet(x0, r0, x, r):
+    """Axisymmetric ring Stokeslet (Mxx, Mxr, Mrx, Mrr) at field point (x0, r0) of a ring (x, r).
+
+    Pozrikidis (1992) normalisation (see the module docstring). Three branches: the field point
+    on the axis (r0 == 0: closed form, Mrx = Mrr = 0); small parameter m = 4 r r0 / s^2 < 0.1
+    (azimuthal trapezoidal rule, which avoids the 1/r0 cancellation of the elliptic form near
+    the axis); otherwise the elliptic form with K, E computed from m1 = d^2/s^2 directly.
+    The coincident point (d = 0) is singular and returns inf.
+    """
+    xh = x0 - x
+    xh2 = xh * xh
+    if r0 == 0.0:
+        rho2 = xh2 + r * r
+        rho = math.sqrt(rho2)
+        rho3 = rho2 * rho
+        return 2.0 * _PI * r * (1.0 / rho + xh2 / rho3), -2.0 * _PI * r * r * xh / rho3, 0.0, 0.0
+    d2 = xh2 + (r - r0) * (r - r0)
+    s2 = xh2 + (r + r0) * (r + r0)
+    m = 4.0 * r * r0 / s2
+    if m < 0.1:
+        return ring_stokeslet_phi(x0, r0, x, r, 8)
+    m1 = d2 / s2
+    if m1 <= 0.0:
+        return math.inf, 0.0, 0.0, math.inf
+    K, E = ellipke_m1(m1)
+    k = math.sqrt(m)
+    rr = math.sqrt(r * r0)
+    sq = r * r + r0 * r0
+    dq = (r - r0) * (r + r0)       # r^2 - r0^2 in factored form: no cancellation near d = 0
+    Mxx = 2.0 * k * math.sqrt(r / r0) * (K + xh2 / d2 * E)
+    Mxr = -(k * xh / rr) * (K - (xh2 - dq) / d2 * E)
+    Mrx = (k * xh / r0) * math.sqrt(r / r0) * (K - (xh2 + dq) / d2 * E)
+    Mrr = (k / (r0 * rr)) * ((2.0 * xh2 + sq) * K
+                             - (2.0 * xh2 * xh2 + 3.0 * xh2 * sq + dq * dq) / d2 * E)
+    return Mxx, Mxr, Mrx, Mrr
+
+
+# --------------------------------------------------------------------------------------------
+# Panel geometry helpers (panels are polynomials of degree p-1 in t in [-1, 1], given by their
+# Legendre coefficients; densities are interpolated by the Lagrange basis on the Gauss nodes)
+# --------------------------------------------------------------------------------------------
+@numba.njit(cache=True)
+def _legendre_eval(c, t):
+    """Value and derivative of sum_n c[n] P_n(t)."""
+    p = c.shape[0]
+    P0 = 1.0
+    D0 = 0.0
+    f = c[0]
+    df = 0.0
+    if p == 1:
+        return f, df
+    P1 = t
+    D1 = 1.0
+    f += c[1] * P1
+    df += c[1] * D1
+    for n in range(1, p - 1):
+        P2 = ((2.0 * n + 1.0) * t * P1 - n * P0) / (n + 1.0)
+        D2 = D0 + (2.0 * n + 1.0) * P1        # P'_{n+1} = P'_{n-1} + (2n+1) P_n
+        f += c[n + 1] * P2
+        df += c[n + 1] * D2
+        P0, P1 = P1, P2
+        D0, D1 = D1, D2
+    return f, df
+
+
+@numba.njit(cache=True)
+def _lagrange(t, tn, bw, ell):
+    """Lagrange basis values ell_k(t) on nodes tn with barycentric weights bw (in place)."""
+    p = tn.shape[0]
+    for k in range(p):
+        if t == tn[k]:
+            for j in range(p):
+                ell[j] = 0.0
+            ell[k] = 1.0
+            return
+    s = 0.0
+    for k in range(p):
+        ell[k] = bw[k] / (t - tn[k])
+        s += ell[k]
+    for k in range(p):
+        ell[k] /= s
+
+
+@numba.njit(cache=True)
+def _nearest_parameter(x0, r0, cx, cr, t_start):
+    """Parameter in [-1, 1] of the point of the panel nearest to (x0, r0), by Gauss-Newton."""
+    t = t_start
+    for _ in range(30):
+        x, dx = _legendre_eval(cx, t)
+        r, dr = _legendre_eval(cr, t)
+        g = (x - x0) * dx + (r - r0) * dr
+        h = dx * dx + dr * dr
+        step = g / h
+        tn = min(1.0, max(-1.0, t - step))
+        if abs(tn - t) < 1e-15:
+            t = tn
+            break
+        t = tn
+    return t
+
+
+@numba.njit(cache=True)
+def _accumulate_interval(x0, r0, a, b, n, gx, gw, cx, cr, tn, bw, ell, acc):
+    """Add the n-point Gauss rule on [a, b] of M(x0; X(t)) |X'(t)| ell_k(t) to acc[k, 4]."""
+    half = 0.5 * (b - a)
+    mid = 0.5 * (a + b)
+    p = tn.shape[0]
+    for i in range(n):
+        t = mid + half * gx[n, i]
+        x, dx = _legendre_eval(cx, t)
+        r, dr = _legendre_eval(cr, t)
+        r = max(r, 0.0)
+        if r == 0.0 or (x == x0 and r == r0):
+            continue            # a ring of zero radius carries nothing; d = 0 has measure zero
+        jac = math.sqrt(dx * dx + dr * dr)
+        Mxx, Mxr, Mrx, Mrr = ring_stokeslet(x0, r0, x, r)
+        w = half * gw[n, i] * jac
+        _lagrange(t, tn, bw, ell)
+        for k in range(p):
+            wk = w * ell[k]
+            acc[k, 0] += wk * Mxx
+            acc[k, 1] += wk * Mxr
+            acc[k, 2] += wk * Mrx
+            acc[k, 3] += wk * Mrr
+
+
+@numba.njit(cache=True)
+def _graded_side(x0, r0, ts, length, sgn, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol):
+    """Integrate over [ts, ts + sgn*length] with a geometric mesh graded toward ts.
+
+    Interval j covers distances [sigma^(j+1), sigma^j] * length from ts; its Gauss order is
+    the smallest that meets ``tol`` given the Bernstein-ellipse rate rho of a singularity at
+    the graded end (rho = (1 + sqrt(sigma))/(1 - sqrt(sigma))) and the interval's share of
+    the integral (~sigma^j). Grading stops when the innermost interval is shorter than the
+    distance to the singularity delta_t (near-singular case) or than 1e-15 (on the panel).
+    """
+    nmax = gx.shape[0] - 1
+    sigma = 0.2
+    log_rho = math.log((1.0 + math.sqrt(sigma)) / (1.0 - math.sqrt(sigma)))
+    log_tol = -math.log(tol)
+    hi = length
+    j = 0
+    floor = max(0.5 * delta_t, 1e-15)
+    while True:
+        lo = hi * sigma
+        last = lo < floor
+        if last:
+            lo = 0.0
+        share = j * math.log(1.0 / sigma)
+        n = int(math.ceil(  # noqa: RUF046 (numba)
+            (log_tol - share) / (2.0 * log_rho))) + 2
+        if last and delta_t > 1e-15:
+            n = nmax            # the innermost interval sees the singularity at ~its own length
+        n = max(4, min(nmax, n))
+        if sgn > 0:
+            _accumulate_interval(x0, r0, ts + lo, ts + hi, n, gx, gw, cx, cr, tn, bw, ell, acc)
+        else:
+            _accumulate_interval(x0, r0, ts - hi, ts - lo, n, gx, gw, cx, cr, tn, bw, ell, acc)
+        if last:
+            break
+        hi = lo
+        j += 1
+
+
+@numba.njit(cache=True)
+def panel_integral(x0, r0, cx, cr, tn, bw, gx, gw, tol, acc):
+    """Weights acc[k, (xx, xr, rx, rr)] of  int_panel M(x0, r0; X(t)) ell_k(t) dl  (singular-safe).
+
+    The panel is the polynomial curve with Legendre coefficients cx, cr on t in [-1, 1]. The
+    integral is split at the parameter t* of the point nearest to the target and each side is
+    integrated on a geometric mesh graded toward t*: exact to ``tol`` for the logarithmic
+    singularity of Mxx, Mrr (target on the panel) and for near-singular targets.
+    """
+    p = tn.shape[0]
+    ell = np.empty(p)
+    for k in range(p):
+        for c in range(4):
+            acc[k, c] = 0.0
+    # start Gauss-Newton from the nearest node
+    best = 0
+    bestd = math.inf
+    for k in range(p):
+        x, _ = _legendre_eval(cx, tn[k])
+        r, _ = _legendre_eval(cr, tn[k])
+        dd = (x - x0) ** 2 + (r - r0) ** 2
+        if dd < bestd:
+            bestd = dd
+            best = k
+    ts = _nearest_parameter(x0, r0, cx, cr, tn[best])
+    x, dx = _legendre_eval(cx, ts)
+    r, dr = _legendre_eval(cr, ts)
+    dist = math.sqrt((x - x0) ** 2 + (r - r0) ** 2)
+    speed = math.sqrt(dx * dx + dr * dr)
+    delta_t = dist / speed
+    if ts > -1.0:
+        _graded_side(x0, r0, ts, ts + 1.0, -1, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol)
+    if ts < 1.0:
+        _graded_side(x0, r0, ts, 1.0 - ts, 1, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol)
+
+
+@numba.njit(cache=True, parallel=True)
+def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, out):
+    """Single-layer influence matrix of a panel set on targets, Nyström form.
+
+    out[2i + a, 2(P p + k) + b] = int_panel_P M_ab(target i; X) ell_k dl, so that
+    u_a(i) = (8 pi eta)^-1 sum out[2i+a, 2j+b] q_b(j) for node densities q (force per area on
+    the fluid). Inputs: targets tx, tr (nt,); panel node coordinates px, pr (np, p); pw (np, p)
+    Gauss weight times |dX/dt| at the nodes; Legendre coefficients pcx, pcr (np, p) of the
+    panel curves; tn, bw Gauss nodes and barycentric weights on [-1, 1]; gx, gw Gauss rules
+    (row n holds the n-point rule); panels closer to a target than ``near`` times their length
+    are integrated by :func:`panel_integral` to ``tol``, the others by the nodes' own rule.
+    """
+    nt = tx.shape[0]
+    npan, p = px.shape
+    for i in numba.prange(nt):
+        x0 = tx[i]
+        r0 = tr[i]
+        acc = np.empty((p, 4))
+        for P in range(npan):
+            length = 0.0
+            for k in range(p):
+                length += pw[P, k]
+            dmin = math.inf
+            for k in range(p):
+                dd = (px[P, k] - x0) ** 2 + (pr[P, k] - r0) ** 2
+                dmin = min(dmin, dd)
+            dmin = math.sqrt(dmin)
+            base = 2 * P * p
+            if dmin < near * length:
+                panel_integral(x0, r0, pcx[P], pcr[P], tn, bw, gx, gw, tol, acc)
+                for k in range(p):
+                    out[2 * i, base + 2 * k] = acc[k, 0]
+                    out[2 * i, base + 2 * k + 1] = acc[k, 1]
+                    out[2 * i + 1, base + 2 * k] = acc[k, 2]
+                    out[2 * i + 1, base + 2 * k + 1] = acc[k, 3]
+            else:
+                for k in range(p):
+                    Mxx, Mxr, Mrx, Mrr = ring_stokeslet(x0, r0, px[P, k], pr[P, k])
+                    w = pw[P, k]
+                    out[2 * i, base + 2 * k] = w * Mxx
+                    out[2 * i, base + 2 * k + 1] = w * Mxr
+                    out[2 * i + 1, base + 2 * k] = w * Mrx
+                    out[2 * i + 1, base + 2 * k + 1] = w * Mrr

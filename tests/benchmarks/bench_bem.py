@@ -1,0 +1,71 @@
+"""Benchmark of the axisymmetric BEM: prints a table (not a test; timings depend on the machine).
+
+Run with ``python tests/benchmarks/bench_bem.py [--cold]``. ``--cold`` removes the numba cache
+of ``bem`` first so that the compile time is measured from scratch (in a subprocess).
+Targets (issue, 2-core machine): sphere at a/R = 0.6 to 1e-8 in V/U in <= 0.5 s after
+compilation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+
+def compile_time(cold: bool) -> float:
+    """Wall time of importing bem and the first solve in a fresh interpreter, minus a warm solve."""
+    if cold:
+        for cache in (ROOT / "bem" / "__pycache__").glob("*.nb*"):
+            cache.unlink()
+    code = ("import time; t=time.perf_counter(); from bem.solve import solve_sphere_mesh; "
+            "solve_sphere_mesh(0.5, 4); t1=time.perf_counter(); solve_sphere_mesh(0.5, 4); "
+            "t2=time.perf_counter(); print(t1-t-(t2-t1))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True,
+                         capture_output=True, text=True)
+    return float(out.stdout.strip())
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cold", action="store_true", help="clear the numba cache first")
+    args = ap.parse_args()
+
+    print(f"numba compile + import ({'cold cache' if args.cold else 'cache as found'}): "
+          f"{compile_time(args.cold):.2f} s")
+    from bem.solve import solve_sphere, solve_sphere_mesh
+    solve_sphere_mesh(0.5, 4)                          # warm-up in this process
+
+    times = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        res = solve_sphere(0.6, tol=1e-10)
+        times.append(time.perf_counter() - t0)
+    print(f"\nsphere a/R = 0.6, tol 1e-10: V/U = {res.V_over_U:.12f} "
+          f"(estimate {res.V_over_U_err:.1e}), dp+R/(eta U) = {res.dp_plus_R:.10f}, "
+          f"K = {res.drag_K:.10f}")
+    print(f"  meshes {res.timings['meshes']}, body panels {res.panels['body']}; "
+          f"median {statistics.median(times):.3f} s (target <= 0.5 s)")
+
+    print("\ncost growth with panel count (a/R = 0.6, order 16, one mesh, both problems)")
+    print(f"{'body':>5} {'wall':>5} {'unknowns':>9} {'assembly s':>11} {'solve s':>8} "
+          f"{'V/U':>18}")
+    for n in (4, 8, 16, 32, 64):
+        best = None
+        for _ in range(3):
+            s = solve_sphere_mesh(0.6, n)
+            if best is None or s["assembly_s"] + s["solve_s"] < best["assembly_s"] + best["solve_s"]:
+                best = s
+        nodes = 16 * (best["panels"]["body"] + best["panels"]["wall"])
+        print(f"{best['panels']['body']:>5} {best['panels']['wall']:>5} {2 * nodes + 3:>9} "
+              f"{best['assembly_s']:>11.3f} {best['solve_s']:>8.3f} {best['V_over_U']:>18.14f}")
+
+
+if __name__ == "__main__":
+    main()
