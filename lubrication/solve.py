@@ -1,0 +1,722 @@
+r"""Lubrication solver for a steady vesicle in a tube (Secomb et al. 1986; Barakat & Shaqfeh 2018b).
+
+The method, in the order of this module:
+
+1. **Inputs and targets.** Reduced volume ``nu``, confinement :math:`\lambda = R_0/R` (or
+   :math:`\lambda/\lambda_c`), bending capillary number :math:`\mathrm{Ca}_B = \eta U R_0^2/\kappa`
+   (``inf``: high-Ca model). In tube radii the vesicle has area :math:`4\pi\lambda_A^2`
+   (:math:`\lambda_A = \lambda\nu^{-1/3}`) and volume :math:`\frac43\pi\lambda^3`.
+2. **Polar caps.** The parallel-flow model fails at the poles and its membrane shear rate
+   diverges there like :math:`1/(r\ln r)`. Caps of rim radius ``CAP_RADIUS`` are excised and
+   treated as spherical (uniform pressure and tension); the boundary conditions at the rims
+   carry the caps' angle, area and volume (:func:`lubrication.equations.spherical_cap`), so the
+   ODEs are never integrated through the regular singular points.
+3. **Initial guess.** A spherocylinder of radius :math:`\rho = \lambda/\lambda_c` (it has the
+   vesicle's area and volume), :math:`Q_0 = \delta` (a uniform film), front tension from the
+   immobile-interface Bretherton law :math:`\sigma_0 = 6(0.643/\delta)^{3/2}` [ηV], pressure
+   :math:`-2\sigma_0/\rho` in the caps and :math:`-\sigma_0/\rho` on the body. Or a previous
+   solution (warm start), rescaled to the new clearance. Warm starts carry the solution along a
+   sweep (continuation in λ/λc, steps of at most half the clearance) and in Ca.
+4. **High-Ca boundary-value problem** (:func:`lubrication.equations.rhs_high_ca`, 6 unknown
+   functions, unknown parameters Q and the arc length S, 8 boundary conditions) by
+   :func:`scipy.integrate.solve_bvp`. Pressure and tension are divided by a tension scale so
+   that every unknown is O(1): solve_bvp measures residuals relative to 1 + |f|, and unscaled
+   tensions of 1e5 put a round-off floor above the tolerance at the poles (the "maximum number
+   of mesh nodes exceeded" trap).
+5. **Bending problem** (:func:`lubrication.equations.rhs_bending`, 8 functions, 10 conditions),
+   by continuation in Ca from the high-Ca solution.
+6. **Acceptance.** Never the solver's status flag alone: largest collocation residual, area and
+   volume recomputed by quadrature of the solution (relative error ≤ ``CONSTRAINT_TOL``), net
+   axial force on the vesicle (≤ ``FORCE_TOL`` of its pressure force), positive tension on the
+   physical branch. A failure is returned as ``success=False`` with the reason.
+7. **Result** in project units (:class:`lubrication.results.LubricationResult`):
+   :math:`V/U = 1/(1 - Q)`, :math:`\Delta p^+ R/(\eta U) = [\Delta p^+R/(\eta V)]/(1 - Q)`,
+   :math:`\Delta p^+R_0/(\eta U) = [\Delta p^+R/(\eta V)]\,\lambda/(1 - Q)` with
+   :math:`\Delta p^+ = \Delta p - 8(1 - Q)L` (Poiseuille drop at the mean velocity over the
+   length L), tensions in ηU.
+
+:func:`sweep_lubrication` solves a list of confinements by continuation.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import logging
+import math
+import platform
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy
+from scipy.integrate import cumulative_trapezoid, solve_bvp
+
+from .checks import InvalidParameterError, check_positive, check_range
+from .equations import (BENDING_STATE, HIGH_CA_STATE, _gap_flow, capillary_number, rhs_bending,
+                        rhs_high_ca, spherical_cap)
+from .geometry import check_passes, critical_confinement, critical_length
+from .results import LubricationResult
+
+__all__ = ["solve_lubrication", "sweep_lubrication", "CAP_RADIUS", "CONSTRAINT_TOL", "FORCE_TOL"]
+
+logger = logging.getLogger(__name__)
+
+# Rim radius of the excised polar caps [R]. Barakat & Shaqfeh switch to the spherical cap below
+# r = 2e-3 (high-Ca). Halving it moves V/U by < 1e-9 and dp+ by < 1e-6 relative (nu = 0.6-0.9,
+# lam/lam_c = 0.6-0.99, both models; tests/lubrication/test_solve.py), but the tensions at the
+# poles by 4e-5 (lam/lam_c = 0.99) to 7e-2 (0.6, where the tension is O(eta U)): the
+# parallel-flow shear rate ~ 1/(r ln r) has a log-log divergent integral at the poles.
+CAP_RADIUS = 2e-3
+# Acceptance: relative error of area and volume recomputed by quadrature; net axial force on the
+# vesicle relative to the scale of its pressure force (physics notes §4).
+CONSTRAINT_TOL = 1e-8
+FORCE_TOL = 1e-3
+
+
+# --------------------------------------------------------------------------- 1. inputs, targets
+@dataclass(frozen=True)
+class _Problem:
+    nu: float
+    lam: float
+    lam_c: float
+    ca_b: float
+    tol: float
+    max_nodes: int
+
+    @property
+    def delta(self) -> float:
+        return 1.0 - self.lam / self.lam_c
+
+    @property
+    def model(self) -> str:
+        return "high-Ca" if math.isinf(self.ca_b) else "bending"
+
+    @property
+    def area(self) -> float:
+        """Vesicle area in R^2: 4 pi lam_A^2, lam_A = lam nu^(-1/3)."""
+        return 4.0 * math.pi * self.lam**2 * self.nu ** (-2.0 / 3.0)
+
+    @property
+    def volume(self) -> float:
+        """Vesicle volume in R^3: (4/3) pi lam^3."""
+        return 4.0 / 3.0 * math.pi * self.lam**3
+
+
+def _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes) -> _Problem:
+    nu = float(check_range("nu", nu, 0.0, 1.0, lo_open=True, hi_open=True,
+                           reason="the lubrication model needs a deflated vesicle (nu < 1)"))
+    if (lam is None) == (lam_ratio is None):
+        raise InvalidParameterError("lam", lam, "give exactly one of lam and lam_ratio")
+    lam_c = float(critical_confinement(nu))
+    if lam is None:
+        lam = float(check_positive("lam_ratio", lam_ratio, reason="lam_ratio = lam/lam_c")) * lam_c
+    lam = float(check_positive("lam", lam))
+    check_passes(nu, lam)
+    if isinstance(ca_b, (int, float, np.floating)) and ca_b == math.inf:
+        ca_b = math.inf
+    else:
+        ca_b = float(check_positive("ca_b", ca_b,
+                                    reason="use ca_b=math.inf for the high-Ca (kappa -> 0) model"))
+    tol = float(check_range("tol", tol, 1e-12, 1e-3,
+                            reason="solve_bvp's relative residual tolerance"))
+    if not isinstance(max_nodes, (int, np.integer)) or max_nodes < 100:
+        raise InvalidParameterError("max_nodes", max_nodes, "an integer >= 100")
+    return _Problem(nu, lam, lam_c, ca_b, tol, int(max_nodes))
+
+
+# --------------------------------------------------------------------------- 2.-3. initial guess
+def _tension_scale(delta):
+    """Front tension of the immobile-interface Bretherton film h = 0.643 (6 Ca)^(2/3) [eta V]."""
+    return 6.0 * (0.643 / delta) ** 1.5
+
+
+def _spherocylinder_guess(prob: _Problem):
+    """High-Ca unknowns on a spherocylinder of radius lam/lam_c: (t, y, [Q, S])."""
+    # 400 nodes resolve the guess; solve_bvp refines where the solution needs it.
+    n_nodes = 400
+    rho = prob.lam / prob.lam_c
+    eps = CAP_RADIUS
+    cylinder = rho * (critical_length(prob.nu) - 2.0)
+    theta_rim = math.asin(eps / rho)
+    cap_arc = rho * (0.5 * math.pi - theta_rim)
+    S = 2.0 * cap_arc + cylinder
+    t = np.linspace(0.0, 1.0, n_nodes)
+    s = S * t
+    rear, front = s < cap_arc, s > S - cap_arc
+    body = ~(rear | front)
+    theta = np.where(rear, theta_rim + s / rho,
+                     np.where(front, theta_rim + (S - s) / rho, 0.5 * math.pi))
+    r = rho * np.sin(theta)
+    psi = np.where(rear, theta - 0.5 * math.pi, np.where(front, 0.5 * math.pi - theta, 0.0))
+    sigma0 = _tension_scale(prob.delta)
+    sigma = np.full_like(s, sigma0)
+    p = np.where(body, -sigma0 / rho, -2.0 * sigma0 / rho)
+    _, cap_area, cap_volume = spherical_cap(1.0 / rho, eps)
+    A = cap_area + cumulative_trapezoid(2.0 * math.pi * r, s, initial=0.0)
+    Omega = cap_volume + cumulative_trapezoid(math.pi * r * r * np.cos(psi), s, initial=0.0)
+    Q0 = prob.delta
+    return t, np.vstack((r, psi, p, sigma, A, Omega)), np.array([Q0, S])
+
+
+def _rescaled_guess(prob: _Problem, state):
+    """A previous high-Ca or bending state moved to the clearance of ``prob`` (a predictor).
+
+    The shape is scaled by (1 - delta_new)/(1 - delta_old) (a spherocylinder of radius 1 - delta
+    keeps its gap equal to delta), Q like the rigid-cylinder estimate (1 - rho^2)/2, tension and
+    pressure like the Bretherton scale delta^(-3/2), area and volume like their targets.
+    """
+    model, t, y, params, old = state
+    # solve_bvp only ever adds nodes; a warm start from a mesh refined for another solution
+    # drops every other node (the clustering survives) so that meshes do not grow along a sweep.
+    remesh_above = 1500
+    while len(t) > remesh_above:
+        keep = np.r_[0:len(t) - 1:2, len(t) - 1]
+        t, y = t[keep], y[:, keep]
+    rho_old, rho_new = 1.0 - old["delta"], 1.0 - prob.delta
+    f_len = rho_new / rho_old
+    f_q = (1.0 - rho_new**2) / (1.0 - rho_old**2)
+    f_sig = _tension_scale(prob.delta) / _tension_scale(old["delta"])
+    y = y.copy()
+    y[0] *= f_len
+    names = HIGH_CA_STATE if model == "high-Ca" else BENDING_STATE
+    if model == "bending":      # tensions in kappa/R^2 also scale with Ca = eta V R^2/kappa
+        f_sig *= capillary_number(prob.ca_b, prob.lam, params[0] * f_q) / old["ca"]
+    for name in ("p", "sigma"):
+        y[names.index(name)] *= f_sig
+    if model == "bending":
+        y[names.index("c_s")] /= f_len
+        y[names.index("q_s")] *= math.sqrt(f_sig)
+    y[names.index("A")] *= prob.area / old["area"]
+    y[names.index("Omega")] *= prob.volume / old["volume"]
+    params = np.array([params[0] * f_q, params[1] * f_len])
+    return model, t, y, params
+
+
+# --------------------------------------------------------------------------- 4. high-Ca problem
+def _solve_scaled(fun, bc, t, y, params, scales, prob):
+    """solve_bvp on the unknowns divided by ``scales`` (an (n, 1) array); returns unscaled."""
+    def scaled_fun(t_, yh, p):
+        return fun(t_, yh * scales, p) / scales
+
+    def scaled_bc(ya, yb, p):
+        return bc(ya * scales[:, 0], yb * scales[:, 0], p)
+
+    sol = solve_bvp(scaled_fun, scaled_bc, t, y / scales, p=params, tol=prob.tol,
+                    max_nodes=prob.max_nodes, bc_tol=prob.tol)
+    sol.scales = scales          # sol.y and sol.sol are in scaled units
+    return sol, sol.y * scales
+
+
+def _high_ca_scales(y, prob):
+    sig = float(np.max(np.abs(y[3])))
+    return np.array([1.0, 1.0, sig, sig, prob.area, prob.volume])[:, None]
+
+
+def _bc_high_ca(prob):
+    eps = CAP_RADIUS
+
+    def bc(ya, yb, params):
+        # cap curvature from the normal balance p = -2 sigma k of a sphere
+        th_r, area_r, vol_r = spherical_cap(-ya[2] / (2.0 * ya[3]), eps)
+        th_f, area_f, vol_f = spherical_cap(-yb[2] / (2.0 * yb[3]), eps)
+        return np.array([ya[0] - eps, ya[1] + 0.5 * math.pi - th_r,
+                         (ya[4] - area_r) / prob.area, (ya[5] - vol_r) / prob.volume,
+                         yb[0] - eps, yb[1] - 0.5 * math.pi + th_f,
+                         (yb[4] + area_f) / prob.area - 1.0, (yb[5] + vol_f) / prob.volume - 1.0])
+    return bc
+
+
+def _solve_high_ca(prob, t, y, params):
+    scales = _high_ca_scales(y, prob)
+    return _solve_scaled(rhs_high_ca, _bc_high_ca(prob), t, y, params, scales, prob)
+
+
+# --------------------------------------------------------------------------- 5. bending problem
+def _bending_from_high_ca(prob, t, y, params, ca_b):
+    """Bending unknowns from a high-Ca solution: p, sigma times Ca, c_s from the normal balance."""
+    r, psi, p, sigma, A, Omega = y
+    ca = capillary_number(ca_b, prob.lam, params[0])
+    c_s = p / sigma + np.cos(psi) / r
+    q_s = np.zeros_like(r)
+    return np.vstack((r, psi, c_s, q_s, ca * p, ca * sigma, A, Omega))
+
+
+def _bending_scales(y, prob):
+    sig = float(np.max(np.abs(y[5])))
+    return np.array([1.0, 1.0, 1.0, math.sqrt(sig), sig, sig, prob.area, prob.volume])[:, None]
+
+
+def _bc_bending(prob, q_scale):
+    eps = CAP_RADIUS
+
+    def bc(ya, yb, params):
+        r0, psi0, c0, q0, p0, s0, a0, v0 = ya
+        r1, psi1, c1, q1, p1, s1, a1, v1 = yb
+        th_r, area_r, vol_r = spherical_cap(-c0, eps)
+        th_f, area_f, vol_f = spherical_cap(-c1, eps)
+        # regular expansion at a pole: q_s = +-(p - 2 sigma c_s) s/2 (rear +, front -)
+        return np.array([r0 - eps, psi0 + 0.5 * math.pi - th_r,
+                         (q0 - 0.5 * eps * (p0 - 2.0 * s0 * c0)) / q_scale,
+                         (a0 - area_r) / prob.area, (v0 - vol_r) / prob.volume,
+                         r1 - eps, psi1 - 0.5 * math.pi + th_f,
+                         (q1 + 0.5 * eps * (p1 - 2.0 * s1 * c1)) / q_scale,
+                         (a1 + area_f) / prob.area - 1.0, (v1 + vol_f) / prob.volume - 1.0])
+    return bc
+
+
+def _solve_bending(prob, t, y, params):
+    def fun(t_, y_, p):
+        return rhs_bending(t_, y_, p, prob.ca_b, prob.lam)
+
+    scales = _bending_scales(y, prob)
+    return _solve_scaled(fun, _bc_bending(prob, scales[3, 0]), t, y, params, scales, prob)
+
+
+# --------------------------------------------------------------------------- 6. acceptance
+def _simpson_cumulative(f, t, f_mid):
+    """Cumulative integral of a function with values f at nodes t and f_mid at midpoints."""
+    h = np.diff(t)
+    return np.concatenate(([0.0], np.cumsum(h * (f[:-1] + 4.0 * f_mid + f[1:]) / 6.0)))
+
+
+def _gauss_integral(f_of_t, t):
+    """Integral over [t0, t_end] of a function of t by 5-point Gauss-Legendre on each interval."""
+    x, w = np.polynomial.legendre.leggauss(5)
+    h = np.diff(t)
+    tq = (t[:-1, None] + 0.5 * h[:, None] * (x[None, :] + 1.0)).ravel()
+    return float(np.sum(f_of_t(tq).reshape(len(h), 5) * (0.5 * h[:, None] * w[None, :])))
+
+
+def _diagnose(prob, model, sol, y):
+    """Quadrature checks of a solve_bvp solution: constraints, force balance, tension sign."""
+    t, params = sol.x, sol.p
+    Q, S = params
+    names = HIGH_CA_STATE if model == "high-Ca" else BENDING_STATE
+    ix = {n: i for i, n in enumerate(names)}
+    t_mid = 0.5 * (t[:-1] + t[1:])
+    y_mid = sol.sol(t_mid) * sol.scales
+    # Caps: spherical with the rim curvature of the solution
+    if model == "high-Ca":
+        k_r = -y[ix["p"], 0] / (2.0 * y[ix["sigma"], 0])
+        k_f = -y[ix["p"], -1] / (2.0 * y[ix["sigma"], -1])
+    else:
+        k_r, k_f = -y[ix["c_s"], 0], -y[ix["c_s"], -1]
+    _, a_r, v_r = spherical_cap(k_r, CAP_RADIUS)
+    _, a_f, v_f = spherical_cap(k_f, CAP_RADIUS)
+    r, psi, p = y[ix["r"]], y[ix["psi"]], y[ix["p"]]
+    r_m, psi_m, p_m = y_mid[ix["r"]], y_mid[ix["psi"]], y_mid[ix["p"]]
+    # Area and volume from the shape r(t), psi(t) of the collocation polynomial by a quadrature
+    # rule other than the collocation's (Simpson), not from the A and Omega unknowns.
+    i_r, i_psi = ix["r"], ix["psi"]
+    sc_r, sc_psi = sol.scales[i_r, 0], sol.scales[i_psi, 0]
+
+    def shape(tq):
+        yq = sol.sol(tq)
+        return yq[i_r] * sc_r, yq[i_psi] * sc_psi
+
+    area = a_r + a_f + _gauss_integral(lambda tq: 2 * math.pi * S * shape(tq)[0], t)
+    volume = v_r + v_f + _gauss_integral(
+        lambda tq: math.pi * S * shape(tq)[0] ** 2 * np.cos(shape(tq)[1]), t)
+    # Net axial force on the vesicle: shear e_m cos(psi) and pressure -p sin(psi) on the body,
+    # pressure on the projected area of each cap (uniform there); the units cancel in the ratio.
+    ca = 1.0 if model == "high-Ca" else capillary_number(prob.ca_b, prob.lam, Q)
+    e_m = _gap_flow(np.clip(r, 1e-12, 1 - 1e-15), Q)[1]
+    e_m_mid = _gap_flow(np.clip(r_m, 1e-12, 1 - 1e-15), Q)[1]
+    shear = _simpson_cumulative(2 * math.pi * S * r * ca * e_m * np.cos(psi), t,
+                                2 * math.pi * S * r_m * ca * e_m_mid * np.cos(psi_m))[-1]
+    press_f = _simpson_cumulative(-2 * math.pi * S * r * p * np.sin(psi), t,
+                                  -2 * math.pi * S * r_m * p_m * np.sin(psi_m))[-1]
+    caps = math.pi * CAP_RADIUS**2 * (p[0] - p[-1])
+    scale = _simpson_cumulative(2 * math.pi * S * r * np.abs(p * np.sin(psi)), t,
+                                2 * math.pi * S * r_m * np.abs(p_m * np.sin(psi_m)))[-1]
+    force = (shear + press_f + caps) / scale
+    return dict(area_error=abs(area / prob.area - 1.0),
+                volume_error=abs(volume / prob.volume - 1.0),
+                force_balance_residual=abs(force), max_residual=float(np.max(sol.rms_residuals)),
+                n_nodes=len(t), bvp_status=int(sol.status), bvp_message=sol.message,
+                min_tension=float(np.min(y[ix["sigma"]])), front_tension=float(y[ix["sigma"], -1]),
+                k_rear=float(k_r), k_front=float(k_f))
+
+
+def _verdict(prob, model, diag):
+    """(success, message) from the diagnostics; the status flag of solve_bvp is only reported."""
+    # A mesh that ran out of nodes may still hold a converged solution: accept residuals up to
+    # 10 tol then, provided the constraints and force balance also pass.
+    res_limit = prob.tol if diag["bvp_status"] == 0 else 10.0 * prob.tol
+    problems = []
+    if not np.isfinite(diag["max_residual"]) or diag["max_residual"] > res_limit:
+        problems.append(f"collocation residual {diag['max_residual']:.2e} > {res_limit:.1e} "
+                        f"(solve_bvp: {diag['bvp_message']})")
+    if not diag["area_error"] <= CONSTRAINT_TOL or not diag["volume_error"] <= CONSTRAINT_TOL:
+        problems.append(f"area error {diag['area_error']:.1e}, volume error "
+                        f"{diag['volume_error']:.1e} (limit {CONSTRAINT_TOL:.0e})")
+    if not diag["force_balance_residual"] <= FORCE_TOL:
+        problems.append(f"net axial force {diag['force_balance_residual']:.1e} of the pressure "
+                        f"force (limit {FORCE_TOL:.0e})")
+    if model == "high-Ca" and not diag["min_tension"] > 0.0:
+        problems.append(f"tension {diag['min_tension']:.3g} <= 0 somewhere: the high-Ca model "
+                        "has no solution there (or the solver found its unphysical branch)")
+    if model == "bending" and not diag["front_tension"] > 0.0:
+        problems.append(f"front tension {diag['front_tension']:.3g} <= 0: unphysical branch")
+    if problems:
+        return False, "not converged: " + "; ".join(problems)
+    return True, (f"converged: residual {diag['max_residual']:.1e}, {diag['n_nodes']} nodes, "
+                  f"area/volume errors {diag['area_error']:.1e}/{diag['volume_error']:.1e}, "
+                  f"force balance {diag['force_balance_residual']:.1e}")
+
+
+# --------------------------------------------------------------------------- 7. result
+def _provenance():
+    try:
+        version = importlib.metadata.version("vesicle-tube")
+    except importlib.metadata.PackageNotFoundError:   # running from a source tree
+        version = "unknown"
+    return {"package": "vesicle-tube", "version": version, "numpy": np.__version__,
+            "scipy": scipy.__version__, "python": platform.python_version()}
+
+
+def _cap_extent(k, eps):
+    """Arc length and axial height (pole to rim, signed) of a spherical cap of curvature k."""
+    theta, _, _ = spherical_cap(k, eps)
+    theta, k = float(theta), float(k)
+    if abs(k) * eps < 1e-8:                      # flat cap: arc eps, height k eps^2/2
+        return eps, 0.5 * k * eps * eps
+    return theta / k, (1.0 - math.cos(theta)) / k
+
+
+def _failed(prob, message, diag, timings, state=None):
+    keep = {k: diag[k] for k in ("force_balance_residual", "area_error", "volume_error",
+                                 "n_nodes", "max_residual") if k in diag}
+    return LubricationResult(nu=prob.nu, lam=prob.lam, lam_c=prob.lam_c, ca_b=prob.ca_b,
+                             model=prob.model, success=False, message=message, tol=prob.tol,
+                             timings=timings, provenance=_provenance(), solver_state=state, **keep)
+
+
+def _result(prob, model, sol, y, diag, message, timings):
+    """LubricationResult in project units from a converged solution (model units)."""
+    names = HIGH_CA_STATE if model == "high-Ca" else BENDING_STATE
+    ix = {n: i for i, n in enumerate(names)}
+    t = sol.x
+    Q, S = (float(v) for v in sol.p)
+    # model pressure and tension units -> eta V / R and eta V
+    ca = 1.0 if model == "high-Ca" else capillary_number(prob.ca_b, prob.lam, Q)
+    r, psi = y[ix["r"]], y[ix["psi"]]
+    p_v, sigma_v = y[ix["p"]] / ca, y[ix["sigma"]] / ca
+    # curvature at the poles (negative = convex), from the spherical caps
+    if model == "high-Ca":
+        c_rear, c_front = p_v[0] / (2 * sigma_v[0]), p_v[-1] / (2 * sigma_v[-1])
+    else:
+        c_rear, c_front = y[ix["c_s"], 0], y[ix["c_s"], -1]
+    arc_r, height_r = _cap_extent(-c_rear, CAP_RADIUS)
+    arc_f, height_f = _cap_extent(-c_front, CAP_RADIUS)
+    # axial position by Simpson on the collocation cubic, from the rear pole
+    psi_mid = sol.sol(0.5 * (t[:-1] + t[1:]))[ix["psi"]] * sol.scales[ix["psi"], 0]
+    x_body = height_r + _simpson_cumulative(S * np.cos(psi), t, S * np.cos(psi_mid))
+    s = np.concatenate(([0.0], arc_r + S * t, [arc_r + S + arc_f]))
+    x = np.concatenate(([0.0], x_body, [x_body[-1] + height_f]))
+    x -= x.min()
+    length = float(x.max())
+    _, e_m, e_w = _gap_flow(r, Q)
+    # Outputs in U units: V/U = 1/(1 - Q) converts eta V to eta U
+    to_u = 1.0 / (1.0 - Q)
+    delta_p = p_v[0] - p_v[-1]                                      # eta V / R
+    dp_plus_v = delta_p - 8.0 * (1.0 - Q) * length                  # dp+ R/(eta V)
+    zero = np.array([0.0])    # shear in the excised caps is neglected by the cap model
+    pressure = to_u * np.concatenate((p_v[:1], p_v, p_v[-1:]))
+    tension = to_u * np.concatenate((sigma_v[:1], sigma_v, sigma_v[-1:]))
+    return LubricationResult(
+        nu=prob.nu, lam=prob.lam, lam_c=prob.lam_c, ca_b=prob.ca_b, model=model,
+        success=True, message=message,
+        V_over_U=to_u, Q=Q, dp_plus_R0=dp_plus_v * prob.lam * to_u, dp_plus_R=dp_plus_v * to_u,
+        ell=length, film_min=float(np.min(1.0 - r)),
+        tension_front=float(tension[-1]), tension_rear=float(tension[0]),
+        tension_max=float(tension.max()),
+        curvature_rear=float(c_rear), curvature_front=float(c_front),
+        # concave rear: the pole curvature is concave, or (deep parachutes, whose cavity floor
+        # is convex again) the rear pole lies ahead of the rearmost point of the membrane
+        shape_class="parachute" if (c_rear > 0 or x[0] > CAP_RADIUS**2) else "bullet",
+        s=s, x=x, r=np.concatenate((zero, r, zero)),
+        psi=np.concatenate(([-0.5 * math.pi], psi, [0.5 * math.pi])),
+        pressure=pressure, tension=tension,
+        shear_membrane=to_u * np.concatenate((zero, e_m, zero)),
+        shear_wall=to_u * np.concatenate((zero, e_w, zero)),
+        force_balance_residual=diag["force_balance_residual"], area_error=diag["area_error"],
+        volume_error=diag["volume_error"], n_nodes=diag["n_nodes"],
+        max_residual=diag["max_residual"], tol=prob.tol, timings=timings,
+        provenance=_provenance(),
+        solver_state=(model, t, y, sol.p.copy(),
+                      dict(delta=prob.delta, area=prob.area, volume=prob.volume,
+                           ca=ca)))
+
+
+# --------------------------------------------------------------------------- 8. driver
+def _attempt(prob, model, guess):
+    """One solve_bvp run from a guess (t, y, params): (sol, y, diag, ok, message)."""
+    t, y, params = guess
+    solver = _solve_high_ca if model == "high-Ca" else _solve_bending
+    with np.errstate(all="ignore"):        # iterates may leave the domain; judged below
+        try:
+            sol, y_sol = solver(prob, t, y, params)
+            diag = _diagnose(prob, model, sol, y_sol)
+        except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
+            return None, None, {}, False, f"not converged: solve_bvp failed ({exc})"
+    ok, message = _verdict(prob, model, diag)
+    return sol, y_sol, diag, ok, message
+
+
+def _bending_by_ca_continuation(prob, sol, y):
+    """Bending solution from a high-Ca one: jump to Ca_B, else come down from Ca_B = 1e4.
+
+    At Ca_B = 1e4 bending is a small perturbation wherever the high-Ca model has a solution;
+    steps of a factor 3 in Ca_B then reach the target.
+    """
+    ca_start, factor = 1e4, 3.0
+    n_steps = max(1, math.ceil(math.log(max(ca_start / prob.ca_b, 1.0)) / math.log(factor)))
+    paths = ([prob.ca_b], list(np.geomspace(max(ca_start, prob.ca_b), prob.ca_b, n_steps + 1)))
+    for path in paths:
+        t, y_k, params = sol.x, y, sol.p
+        for k, ca_b in enumerate(path):
+            step = _Problem(prob.nu, prob.lam, prob.lam_c, float(ca_b), prob.tol, prob.max_nodes)
+            if k == 0:
+                y_k = _bending_from_high_ca(step, t, y_k, params, float(ca_b))
+            else:      # at fixed eta V the bending-unit p, sigma scale like Ca, q_s like Ca^(1/2)
+                y_k = y_k.copy()
+                y_k[4:6] *= path[k] / path[k - 1]
+                y_k[3] *= math.sqrt(path[k] / path[k - 1])
+            b_sol, b_y, diag, ok, message = _attempt(step, "bending", (t, y_k, params))
+            if not ok:
+                logger.debug("bending at Ca_B=%g on the path %s failed: %s", ca_b, path, message)
+                break
+            t, y_k, params = b_sol.x, b_y, b_sol.p
+        if ok:
+            return b_sol, b_y, diag, True, message
+    return None, None, diag, False, message
+
+
+def _point(prob: _Problem, initial: LubricationResult | None, cold: bool) -> LubricationResult:
+    """Solve one (nu, lam, Ca_B) from a warm start and/or the spherocylinder."""
+    clock = time.perf_counter()
+    timings = {}
+    state = initial.solver_state if initial is not None and initial.success else None
+    ok, diag, message = False, {}, "no initial guess (no warm start, cold start not allowed)"
+    # 1) same-model warm start
+    if state is not None and state[0] == prob.model:
+        sol, y, diag, ok, message = _attempt(prob, prob.model, _rescaled_guess(prob, state)[1:])
+        message = "warm start " + message
+        if ok:
+            timings["total"] = time.perf_counter() - clock
+            return _result(prob, prob.model, sol, y, diag, message, timings)
+        logger.debug("warm start failed: %s", message)
+    # 2) high-Ca from a high-Ca warm start, else from the spherocylinder
+    high = _Problem(prob.nu, prob.lam, prob.lam_c, math.inf, prob.tol, prob.max_nodes)
+    guesses = []
+    if state is not None and state[0] == "high-Ca" and prob.model == "bending":
+        guesses.append(_rescaled_guess(high, state)[1:])
+    if cold:
+        guesses.append(_spherocylinder_guess(high))
+    for guess in guesses:
+        sol, y, diag, ok, message = _attempt(high, "high-Ca", guess)
+        if ok:
+            break
+    timings["high_ca"] = time.perf_counter() - clock
+    if ok and prob.model == "bending":
+        sol, y, diag, ok, message = _bending_by_ca_continuation(prob, sol, y)
+        timings["bending"] = time.perf_counter() - clock - timings["high_ca"]
+    timings["total"] = time.perf_counter() - clock
+    if not ok:
+        logger.info("nu=%.4g lam/lam_c=%.6g %s: %s", prob.nu, prob.lam / prob.lam_c, prob.model,
+                    message)
+        return _failed(prob, message, diag, timings)
+    return _result(prob, prob.model, sol, y, diag, message, timings)
+
+
+def _march(prob: _Problem, start: LubricationResult, ratio: float, max_step: float):
+    """Continuation in lam/lam_c from the converged ``start`` to ``ratio`` (warm starts only).
+
+    Each step is at most ``max_step`` and at most half the current clearance delta (delta at
+    most halves or grows by half per step: tension scales like delta^(-3/2)); the step grows by
+    1.5 after a success and halves after a failure, down to ``min_step``. Returns the result at
+    ``ratio``, success False if the continuation got stuck (a fold or the end of the branch).
+    """
+    min_step = 5e-4        # below this the branch is taken to end (or fold) here
+    current, step = start, max_step
+    clock = time.perf_counter()
+    while True:
+        here = current.lam / current.lam_c
+        gap = ratio - here
+        if abs(gap) <= 1e-12 * ratio:
+            return current
+        limit = min(step, 0.5 * (1.0 - here))
+        nxt = ratio if abs(gap) <= limit else here + math.copysign(limit, gap)
+        # A warm step that needs many more nodes than its start has diverged: cap its mesh.
+        nodes = min(prob.max_nodes, max(5000, 3 * current.n_nodes))
+        trial = _point(replace(prob, lam=nxt * prob.lam_c, max_nodes=nodes), current, cold=False)
+        if trial.success:
+            current, step = trial, min(max_step, 1.5 * step)
+            continue
+        step = 0.5 * min(step, abs(gap))
+        if step < min_step:
+            return _failed(prob, f"continuation in lam/lam_c stuck at {here:.6g} on the way to "
+                                 f"{ratio:.6g} (step < {min_step:g}): the branch ends or folds "
+                                 f"(last converged point: curvature_rear="
+                                 f"{current.curvature_rear:.3g}/R, tension_rear="
+                                 f"{current.tension_rear:.3g} eta U); last attempt: "
+                                 f"{trial.message}", {},
+                           {"total": time.perf_counter() - clock})
+
+
+# Cold starts (the spherocylinder) converge near critical confinement; below ANCHOR_RATIO a
+# point that fails cold is reached by continuation from a cold solution at ANCHOR_RATIO.
+ANCHOR_RATIO = 0.98
+MAX_STEP = 0.02
+
+
+def solve_lubrication(nu, lam=None, *, lam_ratio=None, ca_b=math.inf, initial=None, tol=1e-7,
+                      max_nodes=20_000) -> LubricationResult:
+    r"""Steady shape, speed, extra pressure drop and tension of a vesicle in a tube (lubrication).
+
+    Solves the parallel-flow lubrication model of Secomb et al. (1986) in the form of Barakat &
+    Shaqfeh (2018b): high-Ca (tension only, ``ca_b=inf``) or with Helfrich bending (finite
+    ``ca_b``). See the module docstring for the method and the acceptance checks. Without
+    ``initial``, the spherocylinder guess is tried first; if it fails below
+    ``lam_ratio = ANCHOR_RATIO`` the point is reached by continuation from ``ANCHOR_RATIO``.
+
+    Parameters
+    ----------
+    nu : float
+        Reduced volume, 0 < nu < 1 [-].
+    lam : float, optional
+        Confinement R0/R, 0 < lam < lam_c(nu) [-]. Give exactly one of ``lam``, ``lam_ratio``.
+    lam_ratio : float, optional
+        lam / lam_c, 0 < lam_ratio < 1 [-].
+    ca_b : float
+        Bending capillary number eta U R0^2 / kappa, > 0 [-]; ``math.inf`` (default) for the
+        high-Ca model.
+    initial : LubricationResult, optional
+        A converged solution to start from (warm start), preferably at the same nu and a nearby
+        lam; it is rescaled to the new clearance. If it fails, the cold start is tried.
+    tol : float
+        Relative collocation tolerance of :func:`scipy.integrate.solve_bvp`, 1e-12 to 1e-3.
+    max_nodes : int
+        Largest mesh, >= 100.
+
+    Returns
+    -------
+    LubricationResult
+        ``success`` False, NaN outputs and the reason in ``message`` when no solution passed the
+        acceptance checks.
+
+    Notes
+    -----
+    Range (measured, tol = 1e-7): every nu in [0.6, 0.98] converges up to lam/lam_c = 0.9999 in
+    both models. The high-Ca branch ends where the rear pole flattens: lowest lam/lam_c = 0.909,
+    0.838, 0.738, 0.597, 0.346 for nu = 0.6, 0.7, 0.8, 0.9, 0.98. With Ca_B = 50 the bending model
+    continues into parachutes down to 0.704, 0.539, < 0.1, 0.209, 0.204. The parallel-flow
+    approximation needs a long vesicle with small slopes; for short vesicles it is qualitative
+    only, and it gives dp+ < 0 (unphysical) below lam/lam_c ~ 0.45 at nu = 0.9.
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad input (nu outside (0, 1), ca_b <= 0, NaN, ...).
+    CannotPassError
+        lam >= lam_c(nu).
+
+    Examples
+    --------
+    >>> res = solve_lubrication(0.9, lam_ratio=0.99)
+    >>> res.success, round(res.V_over_U, 4), res.shape_class
+    (True, 1.0096, 'bullet')
+    """
+    prob = _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes)
+    if initial is not None and not isinstance(initial, LubricationResult):
+        raise InvalidParameterError("initial", type(initial).__name__,
+                                    "a LubricationResult or None")
+    clock = time.perf_counter()
+    ratio = prob.lam / prob.lam_c
+    # Away from critical a cold start that needs more nodes than this has diverged (converged
+    # cold solutions there use < 5000 at tol = 1e-7): fail early and continue from the anchor.
+    cold_nodes = prob.max_nodes if ratio >= ANCHOR_RATIO or initial is not None else 8000
+    result = _point(replace(prob, max_nodes=min(prob.max_nodes, cold_nodes)), initial, cold=True)
+    if not result.success and ratio < ANCHOR_RATIO:
+        logger.info("nu=%.4g lam/lam_c=%.6g: cold start failed, continuing from %g",
+                    prob.nu, ratio, ANCHOR_RATIO)
+        anchor = _point(replace(prob, lam=ANCHOR_RATIO * prob.lam_c), None, cold=True)
+        if anchor.success:
+            result = _march(prob, anchor, ratio, MAX_STEP)
+    timings = dict(result.timings, total=time.perf_counter() - clock)
+    return replace(result, timings=timings)
+
+
+def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
+                      max_nodes=20_000, max_step=MAX_STEP) -> list[LubricationResult]:
+    r"""Solve a list of confinements by warm-started continuation in lam/lam_c.
+
+    The sweep starts from a cold solution at the requested ratio nearest to ``ANCHOR_RATIO``
+    (near critical confinement, where the spherocylinder guess converges; for finite ``ca_b``
+    via continuation in Ca from the high-Ca solution), then continues upward to the larger
+    ratios and downward to the smaller ones, each point warm-started from its neighbour, with
+    intermediate steps inserted where a step would exceed ``max_step`` or half the clearance.
+    Once a point fails, the points beyond it in the same direction are reported as failed.
+
+    Parameters
+    ----------
+    nu : float
+        Reduced volume, 0 < nu < 1 [-].
+    lam_ratios : array_like
+        lam / lam_c values, each in (0, 1) [-], any order.
+    ca_b : float
+        Bending capillary number eta U R0^2/kappa [-]; ``math.inf`` for the high-Ca model.
+    progress : bool
+        Show a tqdm progress bar (on stderr).
+    tol, max_nodes :
+        As in :func:`solve_lubrication`.
+    max_step : float
+        Largest continuation step in lam/lam_c.
+
+    Returns
+    -------
+    list of LubricationResult
+        In the order of ``lam_ratios``.
+
+    Examples
+    --------
+    >>> out = sweep_lubrication(0.9, [0.99, 0.98], progress=False)
+    >>> [r.success for r in out], out[0].V_over_U < out[1].V_over_U
+    ([True, True], True)
+    """
+    ratios = check_range("lam_ratios", np.atleast_1d(np.asarray(lam_ratios, dtype=float)),
+                         0.0, 1.0, lo_open=True, hi_open=True, reason="lam/lam_c of each point")
+    if ratios.ndim != 1 or ratios.size == 0:
+        raise InvalidParameterError("lam_ratios", ratios, "a non-empty 1-d sequence")
+    max_step = float(check_range("max_step", max_step, 1e-4, 0.5))
+    base = _check_inputs(nu, None, float(ratios[0]), ca_b, tol, max_nodes)
+    from tqdm.auto import tqdm
+    bar = tqdm(total=ratios.size, disable=not progress, desc=f"lubrication nu={base.nu:g}",
+               unit="point")
+    results: list[LubricationResult | None] = [None] * ratios.size
+    i_anchor = int(np.argmin(np.abs(ratios - ANCHOR_RATIO)))
+    anchor = solve_lubrication(base.nu, lam_ratio=float(ratios[i_anchor]), ca_b=base.ca_b,
+                               tol=base.tol, max_nodes=base.max_nodes)
+    results[i_anchor] = anchor
+    bar.update(1)
+    order = np.argsort(ratios, kind="stable")
+    pos = int(np.flatnonzero(order == i_anchor)[0])
+    for direction in (order[pos + 1:], order[:pos][::-1]):      # upward, then downward
+        current = anchor
+        for i in direction:
+            ratio = float(ratios[i])
+            prob = replace(base, lam=ratio * base.lam_c)
+            if not current.success:
+                res = _failed(prob, f"not attempted: the continuation failed before "
+                                    f"lam/lam_c = {ratio:.6g} ({current.message})", {}, {})
+            else:
+                clock = time.perf_counter()
+                res = _march(prob, current, ratio, max_step)
+                res = replace(res, timings=dict(res.timings, total=time.perf_counter() - clock))
+                current = res
+            results[i] = res
+            bar.update(1)
+            logger.debug("nu=%.4g lam/lam_c=%.6g: %s", base.nu, ratio, res.message)
+    bar.close()
+    return results
