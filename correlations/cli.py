@@ -153,7 +153,8 @@ def cmd_estimate(args) -> dict:
         if args.nu is None or args.lam is None:
             raise UsageError("give both --nu and --lam for the dimensionless estimate")
         h = {f"{args.hematocrit_kind}_hematocrit": args.hematocrit} if args.hematocrit is not None else {}
-        est = estimate_dimensionless(args.nu, args.lam, args.ca_b, extrapolate=args.extrapolate, **h)
+        est = estimate_dimensionless(args.nu, args.lam, args.ca_b, extrapolate=args.extrapolate,
+                                     solvers=tuple(args.solver), **h)
         title = f"Dimensionless estimate: nu = {args.nu:g}, lam = {args.lam:g}"
     else:
         if args.ca_b is not None:
@@ -162,7 +163,7 @@ def cmd_estimate(args) -> dict:
                                             "plasma_viscosity_mpas", "bending_modulus_j")
               if getattr(args, k) is not None}
         est = estimate(**kw, hematocrit=args.hematocrit, hematocrit_kind=args.hematocrit_kind,
-                       extrapolate=args.extrapolate)
+                       extrapolate=args.extrapolate, solvers=tuple(args.solver))
         i = est.inputs
         title = (f"Engineering estimate: cell {i['volume_fl']:g} fL, {i['area_um2']:g} um^2 in a "
                  f"{i['diameter_um']:g} um tube; U = {i['velocity_mm_s']:g} mm/s, eta = "
@@ -319,6 +320,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="whether --hematocrit is the tube (H_T) or discharge (H_D) value (default tube)")
     e.add_argument("--extrapolate", action="store_true",
                    help="fill quantities no method covers with flagged extrapolations")
+    e.add_argument("--solver", action="append", default=[], choices=("lubrication",),
+                   help="let the method table use this numerical solver where it is valid "
+                        "(preferred over closed forms; seconds per point)")
     e.add_argument("--plot", metavar="FILE", help="write V/U and dp+ vs lam with this case marked (PNG)")
     common(e)
     e.set_defaults(func=cmd_estimate)
@@ -346,6 +350,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "viscosity command and the estimate)")
     common(f)
     f.set_defaults(func=cmd_fahraeus)
+
+    from lubrication.cli import add_parser as add_lubrication   # light: solvers load on use
+    add_lubrication(sub)
     return p
 
 

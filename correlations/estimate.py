@@ -31,7 +31,7 @@ from lubrication.geometry import (cell_from_volume_area, check_passes, check_red
                                   critical_diameter_um,
                                   critical_length, critical_length_um)
 
-from .registry import METHODS, QUANTITIES
+from .registry import METHODS, QUANTITIES, SOLVERS, SolverNotConverged
 
 __all__ = ["RBC_DEFAULTS", "RUPTURE_TENSION_MN_M", "Quantity", "Estimate", "estimate",
            "estimate_dimensionless"]
@@ -85,13 +85,14 @@ class Estimate:
     regime: str
     notes: tuple = ()
     provenance: dict = field(default_factory=dict)
+    converged: bool = True
 
     def __getitem__(self, key):
         return self.quantities[key].value
 
     def to_dict(self) -> dict:
         """Flat JSON-ready dict: each key its value, plus ``methods`` (provenance per key)."""
-        out = {"command": "estimate", "converged": True, "regime": self.regime}
+        out = {"command": "estimate", "converged": self.converged, "regime": self.regime}
         out.update({k: q.value for k, q in self.quantities.items()})
         out["methods"] = {k: {"method": q.method, "valid": q.valid, "source": q.source,
                               "unit": q.unit, **({"note": q.note} if q.note else {})}
@@ -102,10 +103,23 @@ class Estimate:
         return out
 
 
-def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool) -> Quantity:
-    """Evaluate ``quantity`` with the first valid method of the table (see module docstring)."""
+def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
+            solvers: tuple = (), log: dict | None = None) -> Quantity:
+    """Evaluate ``quantity`` with the first valid method of the table (see module docstring).
+
+    Rows of an enabled solver come first; rows of other solvers are skipped, but when one would
+    have been valid that is recorded in ``log["available"]``. Solver failures go to
+    ``log["failures"]`` and the next row is tried.
+    """
+    log = {} if log is None else log
     reasons, fallback = [], None
-    for m in (m for m in METHODS if m.quantity == quantity):
+    rows = sorted((m for m in METHODS if m.quantity == quantity and
+                   (m.solver is None or m.solver in solvers)), key=lambda m: m.solver is None)
+    for m in METHODS:
+        if (m.quantity == quantity and m.solver is not None and m.solver not in solvers
+                and m.validity.contains(**known)):
+            log.setdefault("available", set()).add(m.solver)
+    for m in rows:
         missing = [r for r in m.requires if r not in known]
         if missing:
             reasons.append(f"{m.name}: needs a valid {', '.join(missing)}")
@@ -114,9 +128,14 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool) -
             continue
         bad = m.validity.violations(**known)
         if not bad:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", OutOfRangeWarning)
-                return Quantity(m.evaluate(known), _UNITS[quantity], m.name, True, m.source)
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", OutOfRangeWarning)
+                    return Quantity(m.evaluate(known), _UNITS[quantity], m.name, True, m.source)
+            except SolverNotConverged as exc:
+                log.setdefault("failures", {})[m.solver] = str(exc)
+                reasons.append(f"{m.name}: {exc}")
+                continue
         reasons.append(f"{m.name}: {'; '.join(bad)}")
         dist = m.validity.distance(**known)
         if extrapolate and (fallback is None or dist < fallback[0]):
@@ -125,9 +144,13 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool) -
     if fallback is None:
         return Quantity(None, _UNITS[quantity], None, False, "", note)
     m = fallback[1]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", OutOfRangeWarning)
-        value = m.evaluate({**extrapolated, **known})
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", OutOfRangeWarning)
+            value = m.evaluate({**extrapolated, **known})
+    except SolverNotConverged as exc:
+        log.setdefault("failures", {})[m.solver] = str(exc)
+        return Quantity(None, _UNITS[quantity], None, False, "", f"{note}; {m.name}: {exc}")
     return Quantity(value, _UNITS[quantity], m.name, False, m.source, "EXTRAPOLATED; " + note)
 
 
@@ -171,8 +194,12 @@ def _hematocrits(tube_hematocrit, discharge_hematocrit) -> dict:
     return out
 
 
-def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapolate: bool):
-    """Geometry state, then every quantity of the table; returns (state, quantities)."""
+def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapolate: bool,
+          solvers: tuple, log: dict):
+    """Geometry state, then every quantity of the table; returns (state, quantities).
+
+    ``log`` collects which disabled solvers would apply and which enabled ones failed.
+    """
     lam_c = check_passes(nu, lam)
     state = {"nu": nu, "lam": lam, "lam_c": lam_c, "delta": 1.0 - lam / lam_c,
              "ell_c": critical_length(nu), **hematocrits}
@@ -188,7 +215,7 @@ def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapola
         if name in _HEMATOCRIT_KEYS and not hematocrits:
             quantities[name] = Quantity(None, _UNITS[name], None, False, "", NO_HEMATOCRIT)
             continue
-        q = quantities[name] = _select(name, known, extrapolated, extrapolate)
+        q = quantities[name] = _select(name, known, extrapolated, extrapolate, solvers, log)
         if q.value is not None:
             (known if q.valid else extrapolated)[name] = q.value
     geometric = {k: Quantity(state[k], "-", "geometry (Chen 2020 §III)", True)
@@ -204,7 +231,7 @@ def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapola
 def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
                            tube_hematocrit: float | None = None,
                            discharge_hematocrit: float | None = None,
-                           extrapolate: bool = False) -> Estimate:
+                           extrapolate: bool = False, solvers: tuple = ()) -> Estimate:
     r"""Dimensionless estimate for reduced volume ``nu`` and confinement ``lam = R0/R``.
 
     Parameters
@@ -220,6 +247,10 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
         At most one, a fraction in [0, 1); enables the single-file apparent viscosity.
     extrapolate : bool
         Fill quantities that no method covers with the least-extrapolated method, flagged.
+    solvers : tuple of str
+        Numerical solvers the method table may use, e.g. ``("lubrication",)``; they take
+        precedence over the closed forms where valid. A solver that fails to converge is
+        reported in ``notes`` and makes ``converged`` False.
 
     Raises
     ------
@@ -236,15 +267,30 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
     nu, lam = float(check_reduced_volume(nu)), float(check_positive("lam", lam))
     if ca_b is not None:
         ca_b = float(check_positive("ca_b", ca_b))
-    state, quantities = _core(nu, lam, ca_b, hematocrits, None, extrapolate)
+    solvers, log = _check_solvers(solvers), {}
+    state, quantities = _core(nu, lam, ca_b, hematocrits, None, extrapolate, solvers, log)
     inputs = {"nu": nu, "lam": lam, "ca_b": ca_b, **hematocrits}
     return Estimate(inputs=inputs, quantities=quantities, regime=_regime(lam, state["delta"]),
-                    notes=_notes(quantities, ca_b), provenance=_provenance())
+                    notes=_notes(quantities, ca_b, log), provenance=_provenance(),
+                    converged=not log.get("failures"))
 
 
-def _notes(quantities: dict, ca_b) -> tuple:
+def _check_solvers(solvers) -> tuple:
+    for name in solvers:
+        check_choice("solvers", name, SOLVERS)
+    return tuple(solvers)
+
+
+def _notes(quantities: dict, ca_b, log: dict) -> tuple:
     notes = []
-    missing = [k for k, q in quantities.items() if q.value is None and q.note.startswith("no valid")]
+    for solver, message in sorted(log.get("failures", {}).items()):
+        notes.append(f"The {solver} solver was enabled but did not converge: {message}")
+    available = sorted(log.get("available", ()))
+    if available:
+        notes.append("The " + " and ".join(available) + " solver covers this case: enable it with "
+                     + " ".join(f"--solver {a}" for a in available) + " (seconds per point).")
+    missing = [k for k in QUANTITIES if quantities[k].value is None
+               and quantities[k].note.startswith("no valid")]
     if missing:
         notes.append(f"No closed-form method is valid for {', '.join(missing)} here; use "
                      "extrapolate=True (--extrapolate) for flagged extrapolations.")
@@ -261,7 +307,7 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
              plasma_viscosity_mpas: float = RBC_DEFAULTS["plasma_viscosity_mpas"],
              bending_modulus_j: float = RBC_DEFAULTS["bending_modulus_j"], *,
              hematocrit: float | None = None, hematocrit_kind: str = "tube",
-             extrapolate: bool = False) -> Estimate:
+             extrapolate: bool = False, solvers: tuple = ()) -> Estimate:
     r"""Engineering estimate from physical inputs (defaults: human RBC in a 4 µm capillary).
 
     Parameters
@@ -282,7 +328,7 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
         Volume fraction in [0, 1) (not %); enables the apparent viscosity eta_rel.
     hematocrit_kind : {"tube", "discharge"}
         Whether ``hematocrit`` is the tube (H_T) or discharge (H_D) hematocrit.
-    extrapolate : bool
+    extrapolate, solvers :
         See :func:`estimate_dimensionless`.
 
     Returns
@@ -321,7 +367,8 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     hematocrits = {}
     if hematocrit is not None:
         hematocrits[f"{kind}_hematocrit"] = float(check_fraction("hematocrit", hematocrit))
-    state, q = _core(nu, lam, ca_b, hematocrits, diameter_um, extrapolate)
+    solvers, log = _check_solvers(solvers), {}
+    state, q = _core(nu, lam, ca_b, hematocrits, diameter_um, extrapolate, solvers, log)
     inputs = {"volume_fl": float(volume_fl), "area_um2": float(area_um2), "diameter_um": diameter_um,
               "velocity_mm_s": U * 1e3, "plasma_viscosity_mpas": eta * 1e3, "bending_modulus_j": kappa,
               "hematocrit": hematocrit, "hematocrit_kind": kind}
@@ -335,7 +382,7 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
                     length_um=_scaled(q["ell"], R_m * 1e6, "um"),
                     # gamma_F = (gamma_F/(eta V)) eta (V/U) U, in mN/m
                     tension_front_mN_m=_scaled(q["tension_front"], eta * U * 1e3, "mN/m", q["V_over_U"]))
-    notes = list(_notes(q, ca_b))
+    notes = list(_notes(q, ca_b, log))
     tension = physical["tension_front_mN_m"]
     if tension.value is not None:
         lo, hi = RUPTURE_TENSION_MN_M
@@ -344,4 +391,4 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
         notes.append(f"Front tension {tension.value:.3g} mN/m{flag} is {verdict} the bilayer rupture "
                      f"range {lo:g}-{hi:g} mN/m.")
     return Estimate(inputs=inputs, quantities={**q, **physical}, regime=_regime(lam, state["delta"]),
-                    notes=tuple(notes), provenance=_provenance())
+                    notes=tuple(notes), provenance=_provenance(), converged=not log.get("failures"))

@@ -31,10 +31,20 @@ discharge_hematocrit  single_file_flux, fahraeus...  as tube_hematocrit
 eta_rel               single_file_chen2020           d <= 8 um, dp_plus_R0 and H_T valid
                       pries1992_in_vitro             3.3 <= d <= 1978 um, H_D <= 0.9
 ====================  =============================  ==============================================
+
+Opt-in solver rows (used first when the caller enables the solver, e.g. ``--solver
+lubrication``; otherwise the estimate only notes that the solver covers the case):
+
+====================  =============================  ==============================================
+V/U, film (minimum     lubrication_solver             0.6 <= nu <= 0.98, delta <= 0.3
+gap), ell, dp+, shape,                                (LUBRICATION_RANGE); Ca_B from the case, 50 if
+front tension                                         unknown; seconds per point
+====================  =============================  ==============================================
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -43,7 +53,10 @@ from lubrication.checks import ValidityRange
 
 from . import film, pressure, shape, viscosity
 
-__all__ = ["Method", "METHODS", "QUANTITIES"]
+__all__ = ["Method", "METHODS", "QUANTITIES", "SOLVERS", "SolverNotConverged"]
+
+#: Opt-in numerical solvers that rows of the table may name.
+SOLVERS = ("lubrication",)
 
 
 @dataclass(frozen=True)
@@ -64,6 +77,9 @@ class Method:
         ``evaluate(state) -> value`` with ``state`` the dict described in the module docstring.
     requires : tuple of str
         Quantities that must already be available *and valid* in the state.
+    solver : str or None
+        Name of the numerical solver behind the row (``"lubrication"``); such rows are used only
+        when the caller enables that solver, and then ahead of the closed forms.
     """
 
     quantity: str
@@ -72,6 +88,11 @@ class Method:
     validity: ValidityRange
     evaluate: Callable[[dict], float | str]
     requires: tuple[str, ...] = ()
+    solver: str | None = None
+
+
+class SolverNotConverged(RuntimeError):
+    """A solver row could not produce a converged solution (the message says why)."""
 
 
 # Chen et al. 2020 state that their vesicle V/U and dp+ agree with the small rigid-sphere laws to
@@ -96,6 +117,43 @@ def _eta_single_file(s: dict) -> float:
     # Lengths in units of the tube radius: d = 2, R0 = lam.
     return viscosity.viscosity_single_file_chen2020(s["dp_plus_R0"], 2.0, s["lam"], s["tube_hematocrit"])
 
+# Lubrication solver (issue 4). Chen et al. 2020 (fig. vel, dpa) find the Secomb et al. (1986)
+# lubrication model in very good agreement with their BEM for lam > 1.4 at nu ~ 0.6, i.e.
+# lam/lam_c >~ 0.7 (delta <= 0.3); nu from 0.6 to 0.98 is the range the solver is tested on.
+LUBRICATION_RANGE = ValidityRange.of(
+    "Chen et al. 2020 §IV.C (lubrication vs BEM) and the tested range of lubrication.solve",
+    nu=(0.6, 0.98), delta=(0.0, 0.3))
+#: Ca_B used by the lubrication rows when the estimate has none (Chen et al. 2020 use 50).
+LUBRICATION_DEFAULT_CA_B = 50.0
+
+
+@functools.lru_cache(maxsize=16)
+def _lubrication_solution(nu: float, lam: float, ca_b: float):
+    from lubrication.solve import solve_lubrication
+    res = solve_lubrication(nu, lam, ca_b=ca_b)
+    if not res.success:
+        raise SolverNotConverged(f"lubrication solver did not converge: {res.message}")
+    return res
+
+
+def _lubrication(key: str):
+    def evaluate(s: dict):
+        res = _lubrication_solution(s["nu"], s["lam"], s.get("ca_b", LUBRICATION_DEFAULT_CA_B))
+        if key == "tension_front":                 # table unit: eta V (result: eta U)
+            return res.tension_front / res.V_over_U
+        return getattr(res, key)
+    return evaluate
+
+
+_LUBRICATION_ROWS = tuple(
+    Method(q, "lubrication_solver", "Secomb et al. 1986 / Barakat & Shaqfeh 2018b lubrication "
+           "model, lubrication.solve" + (" (minimum gap)" if q == "film" else ""),
+           LUBRICATION_RANGE, _lubrication(key), solver="lubrication")
+    for q, key in (("V_over_U", "V_over_U"), ("film", "film_min"), ("ell", "ell"),
+                   ("dp_plus_R0", "dp_plus_R0"), ("shape_class", "shape_class"),
+                   ("tension_front", "tension_front")))
+
+
 def _fahraeus_tube(s: dict) -> float:
     return viscosity.tube_hematocrit_fahraeus(s["diameter_um"], s["discharge_hematocrit"], constants="pries1992")
 
@@ -109,6 +167,7 @@ def _eta_pries1992(s: dict) -> float:
 
 
 METHODS: tuple[Method, ...] = (
+    *_LUBRICATION_ROWS,
     Method("V_over_U", "small_sphere_faxen", "Chen et al. 2020 eq. small1 (Faxen)",
            SMALL_VESICLE_RANGE, lambda s: asymptotics.speed_small_sphere(s["lam"])),
     Method("V_over_U", "near_critical_barakat2018a",

@@ -16,7 +16,7 @@ from .asymptotics import (NEAR_CRITICAL_RANGE, SMALL_SPHERE_RANGE, dp_plus_near_
 from .checks import OutOfRangeWarning
 from .geometry import check_reduced_volume, critical_confinement
 
-__all__ = ["plot_speed_asymptotics", "plot_dp_plus_asymptotics"]
+__all__ = ["plot_speed_asymptotics", "plot_dp_plus_asymptotics", "plot_shape", "plot_sweep"]
 
 _LAM_LABEL = "λ = R0/R [-]"
 
@@ -110,3 +110,75 @@ def plot_dp_plus_asymptotics(nu=(0.6, 0.8, 0.98), ax=None):
     """
     return _draw(_new_axes(ax), nu, (dp_plus_small_sphere, dp_plus_near_critical),
                  "Δp⁺R0/(ηU) [-]", log=True)
+
+
+def plot_shape(result, ax=None):
+    """Steady shape of a lubrication solution in the tube, coloured by membrane tension.
+
+    Parameters
+    ----------
+    result : lubrication.results.LubricationResult
+        A converged solution (lengths in tube radii).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new headless figure if None.
+
+    Returns
+    -------
+    ax : matplotlib.axes.Axes
+    """
+    ax = _new_axes(ax)
+    x = np.asarray(result.x) - 0.5 * (np.max(result.x) + np.min(result.x))
+    r = np.asarray(result.r)
+    points = ax.scatter(np.concatenate([x, x]), np.concatenate([r, -r]), s=2,
+                        c=np.concatenate([result.tension, result.tension]), cmap="viridis")
+    ax.figure.colorbar(points, ax=ax, label="tension γ/(ηU) [-]")
+    span = max(1.5, 0.6 * (np.max(x) - np.min(x)) + 0.5)
+    for side in (1.0, -1.0):
+        ax.plot([-span, span], [side, side], "k-", lw=2)
+    ax.annotate("flow →", (0.02, 0.9), xycoords="axes fraction")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x/R [-]")
+    ax.set_ylabel("r/R [-]")
+    ax.set_title(f"ν = {result.nu:.3g}, λ/λc = {result.lam_ratio:.4g}, {result.model}: "
+                 f"V/U = {result.V_over_U:.4g}, {result.shape_class}", fontsize="small")
+    return ax
+
+
+def plot_sweep(results, axes=None):
+    """V/U, Δp⁺R0/(ηU), minimum film h/R and length L/R against λ for a lubrication sweep.
+
+    The near-critical asymptotes (Chen et al. 2020 eqs. asmyp1/asmyp2, sfilm2 and sL) are drawn
+    dashed for comparison. Failed points are left out.
+
+    Returns
+    -------
+    ax : matplotlib.axes.Axes
+        The first of the four panels (``ax.figure`` holds all).
+    """
+    if axes is None:
+        from matplotlib.figure import Figure
+        axes = Figure(figsize=(10, 7)).subplots(2, 2).ravel()
+    ok = [r for r in results if r.success]
+    lam = np.array([r.lam for r in ok])
+    nu, lam_c = results[0].nu, results[0].lam_c
+    lam_a = lam_c * np.linspace(0.9, 0.9995, 80)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutOfRangeWarning)
+        reference = {
+            "V_over_U": (speed_near_critical(nu, lam_a), "eq. asmyp1"),
+            "dp_plus_R0": (dp_plus_near_critical(nu, lam_a), "eq. asmyp2"),
+            "film_min": (1.0 - lam_a / lam_c, "1 − λ/λc (eq. sfilm2)"),
+            "ell": (2.0 * nu ** (-2.0 / 3.0) * lam_c * lam_a, "ℓc λ/λc (eq. sL)"),
+        }
+    labels = {"V_over_U": "V/U [-]", "dp_plus_R0": "Δp⁺R0/(ηU) [-]", "film_min": "h_min/R [-]",
+              "ell": "L/R [-]"}
+    for ax, key in zip(axes, labels):
+        ax.plot(lam, [getattr(r, key) for r in ok], "o-", ms=3, label=f"lubrication ({results[0].model})")
+        ref, name = reference[key]
+        ax.plot(lam_a, ref, "k--", label=name)
+        ax.set_xlabel(_LAM_LABEL)
+        ax.set_ylabel(labels[key])
+        ax.legend(fontsize="small")
+    axes[1].set_yscale("log")
+    axes[0].set_title(f"ν = {nu:.3g}, λc = {lam_c:.4g}", fontsize="small")
+    return axes[0]

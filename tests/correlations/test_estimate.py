@@ -378,7 +378,10 @@ def test_value_method_invariant_also_holds_with_extrapolation():
 # ------------------------------------------------------------------------------------------
 
 def _expected_methods(est, hematocrits: dict):
-    """First row of the method table whose inputs are valid and whose range holds the state."""
+    """First row of the method table whose inputs are valid and whose range holds the state.
+
+    Without enabled solvers (the default), rows of numerical solvers are not candidates.
+    """
     state = {k: est[k] for k in ("nu", "lam", "lam_c", "delta", "ell_c")}
     if est.inputs.get("ca_b") is not None:
         state["ca_b"] = est.inputs["ca_b"]
@@ -393,7 +396,7 @@ def _expected_methods(est, hematocrits: dict):
             continue
         chosen = None
         for m in METHODS:
-            if m.quantity != name or any(r not in state for r in m.requires):
+            if m.quantity != name or m.solver is not None or any(r not in state for r in m.requires):
                 continue
             if all(lo <= state[b] <= hi for b, lo, hi in m.validity.bounds if b in state):
                 chosen = m
