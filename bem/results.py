@@ -15,7 +15,9 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["SphereResult", "provenance"]
+import numpy as np
+
+__all__ = ["DROP_PROFILE_COLUMNS", "DropResult", "SphereResult", "provenance"]
 
 
 def provenance() -> dict:
@@ -114,3 +116,174 @@ class SphereResult:
                 os.unlink(tmp)
             raise
         return path
+
+
+# Columns of the CSV written by DropResult.save, with their units.
+DROP_PROFILE_COLUMNS = (
+    ("s", "arc length from the rear pole [R]"),
+    ("x", "axial position, drop centroid at 0 [R]"),
+    ("r", "interface radius [R]"),
+    ("psi", "tangent angle from the axis [rad]"),
+    ("kappa1", "meridional curvature, positive for a sphere [1/R]"),
+    ("kappa2", "azimuthal curvature, positive for a sphere [1/R]"),
+)
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` to a temporary file beside ``path``, fsync, then rename it onto ``path``."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _clean(v):
+    """JSON-compatible value: numpy -> Python, non-finite floats -> None, arrays -> lists."""
+    if isinstance(v, dict):
+        return {k: _clean(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_clean(x) for x in v]
+    if hasattr(v, "tolist"):
+        return _clean(v.tolist())
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
+
+
+@dataclass(frozen=True, eq=False)      # eq=False: arrays have no truth value
+class DropResult:
+    r"""Steady clean drop (viscosity ratio 1, constant tension) on the axis of a tube (BEM).
+
+    Scalings: R = 1, U the mean velocity of the undisturbed Poiseuille flow, eta the viscosity;
+    ``lam`` = R0/R with R0 the drop's volume radius, ``ca`` = ηU/γ.
+
+    A result whose ``success`` is False carries the best numbers found (NaN where there are
+    none); ``message`` says why it failed (no convergence, no steady shape, a drop touching the
+    wall, refinement pair disagreeing) and callers must not use the numbers as converged.
+
+    Attributes
+    ----------
+    lam, ca : float
+        Inputs [-].
+    success : bool
+        Steady state found on both meshes of the refinement pair, pair agreement within
+        ``tol`` and pointwise residual within ``residual_tol``.
+    V_over_U : float
+        Drop velocity over U [-].
+    dp_plus_R, dp_plus_R0 : float
+        Extra pressure drop at fixed flow rate, Δp⁺R/(ηU) and Δp⁺R0/(ηU) [-].
+    error_estimate : dict
+        |fine − coarse| of the refinement pair for V_over_U, dp_plus_R and dp_plus_R0: an upper
+        bound of the fine result's error when the error falls at least like N^-1.7 in the
+        number N of modes (observed: faster, ~spectral; the Richardson estimate
+        |f − c|/((N_f/N_c)^p − 1) with the observed order p is much smaller).
+    length, max_radius, film : float
+        Drop length x_front − x_rear, largest radius and smallest gap 1 − max r [R].
+    curvature_front, curvature_rear : float
+        Curvature at the front and rear pole (both principal curvatures are equal there)
+        [1/R]; negative = concave.
+    x, r, s, psi, kappa1, kappa2 : ndarray
+        Shape from rear to front pole (poles included), see :data:`DROP_PROFILE_COLUMNS`.
+    volume_error : float
+        Relative error of the volume computed by the panel quadrature of the fine mesh against
+        4πλ³/3 (the parametrisation imposes the volume; this measures the geometry).
+    residual : float
+        Steady-state residual max |u·n − V n_x| over the fine mesh's nodes [U].
+    panels, panels_coarse : dict
+        Drop, wall and inlet panel counts, Gauss order and shape modes of the two meshes.
+    iterations : dict
+        Newton iterations, BEM evaluations and difference Jacobians per stage.
+    timings : dict
+        Wall-clock seconds per stage and in total.
+    modes, density : ndarray
+        Spectral shape of the fine solution (:class:`bem.shape.SpectralCurve`), for warm
+        starts.
+    """
+
+    lam: float
+    ca: float
+    success: bool
+    message: str
+    V_over_U: float = math.nan
+    dp_plus_R: float = math.nan
+    dp_plus_R0: float = math.nan
+    error_estimate: dict = field(default_factory=dict)
+    length: float = math.nan
+    max_radius: float = math.nan
+    film: float = math.nan
+    curvature_front: float = math.nan
+    curvature_rear: float = math.nan
+    volume_error: float = math.nan
+    residual: float = math.nan
+    tol: float = math.nan
+    residual_tol: float = math.nan
+    panels: dict = field(default_factory=dict)
+    panels_coarse: dict = field(default_factory=dict)
+    half_length: float = math.nan
+    iterations: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+    x: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    r: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    s: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    psi: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    kappa1: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    kappa2: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    modes: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    density: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    shape_length: float = math.nan
+    provenance: dict = field(default_factory=provenance, repr=False)
+
+    @property
+    def converged(self) -> bool:
+        """Alias of ``success`` (the CLI's key)."""
+        return self.success
+
+    def curve(self):
+        """The fine solution's :class:`bem.shape.SpectralCurve` (centroid at x = 0)."""
+        from .shape import SpectralCurve
+        return SpectralCurve.closed(self.modes, volume=4.0 / 3.0 * math.pi * self.lam**3,
+                                    density=self.density)
+
+    _SCALARS = ("lam", "ca", "success", "message", "V_over_U", "dp_plus_R", "dp_plus_R0",
+                "error_estimate", "length", "max_radius", "film", "curvature_front",
+                "curvature_rear", "volume_error", "residual", "tol", "residual_tol", "panels",
+                "panels_coarse", "half_length", "iterations", "timings", "provenance")
+
+    def to_dict(self, shape: bool = True) -> dict:
+        """Scalars, diagnostics and provenance as a JSON-ready dict (non-finite -> None).
+
+        With ``shape`` the profile arrays x, r and the modes are included as lists.
+        """
+        out = {k: _clean(getattr(self, k)) for k in self._SCALARS}
+        out["converged"] = bool(self.success)
+        if shape:
+            out["shape"] = {"x": _clean(self.x), "r": _clean(self.r),
+                            "modes": _clean(self.modes), "density": _clean(self.density)}
+        return out
+
+    def save(self, directory, stem: str | None = None) -> tuple[Path, Path]:
+        """Write ``<stem>.json`` (scalars, with the modes) and ``<stem>.csv`` (shape profile).
+
+        Each file goes to a temporary file in ``directory`` and is renamed, so an interrupted
+        run never leaves a half-written file. Default stem ``bem_drop_lam<lam>_ca<ca>``.
+        """
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        stem = stem or f"bem_drop_lam{self.lam:.6g}_ca{self.ca:.6g}"
+        json_path, csv_path = directory / f"{stem}.json", directory / f"{stem}.csv"
+        data = self.to_dict()
+        data["profile_columns"] = dict(DROP_PROFILE_COLUMNS)
+        _atomic_write_text(json_path, json.dumps(data, indent=2, sort_keys=True,
+                                                 allow_nan=False))
+        lines = [",".join(name for name, _ in DROP_PROFILE_COLUMNS)]
+        cols = [np.asarray(getattr(self, name)) for name, _ in DROP_PROFILE_COLUMNS]
+        lines += [",".join(repr(float(v)) for v in row) for row in zip(*cols)]
+        _atomic_write_text(csv_path, "\n".join(lines) + "\n")
+        return json_path, csv_path

@@ -245,6 +245,7 @@ NUS = [0.6, 0.7, 0.8, 0.9, 0.98]
 
 
 @pytest.mark.slow
+@pytest.mark.ci          # representative validation run, also in the default suite and CI
 @pytest.mark.parametrize("ca_b", [math.inf, 50.0])
 @pytest.mark.parametrize("nu", NUS)
 def test_reaches_lam_ratio_0_999(nu, ca_b):
