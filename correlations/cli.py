@@ -265,19 +265,10 @@ def cmd_fahraeus(args) -> dict:
 def _save_plot(ax, path: str) -> None:
     """Write the figure of ``ax`` atomically (temporary file, then rename)."""
     import os
-    import tempfile
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=directory, suffix=os.path.splitext(path)[1] or ".png")
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    try:
-        os.chmod(tmp, 0o666 & ~umask)        # mkstemp makes 0600; a figure is an ordinary file
-        ax.figure.savefig(tmp, dpi=150, bbox_inches="tight")
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    from lubrication.io import atomic_write
+    fmt = os.path.splitext(path)[1].lstrip(".") or "png"
+    atomic_write(path, lambda f: ax.figure.savefig(f, format=fmt, dpi=150, bbox_inches="tight"),
+                 binary=True)
     print(f"figure written to {path}", file=sys.stderr)
 
 

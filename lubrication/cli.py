@@ -117,7 +117,7 @@ def _column(res, key):
 
 def _write_sweep_csv(directory: Path, results, table) -> Path:
     """One row per point, written atomically (temporary file, then rename)."""
-    from .results import _atomic_write
+    from .io import atomic_write
     directory.mkdir(parents=True, exist_ok=True)
     r0 = results[0]
     path = directory / f"lubrication_sweep_nu{r0.nu:.4g}_{r0.model}" \
@@ -128,5 +128,5 @@ def _write_sweep_csv(directory: Path, results, table) -> Path:
         w.writeheader()
         w.writerows(table)
 
-    _atomic_write(path, write)
+    atomic_write(path, write)
     return path

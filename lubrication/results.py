@@ -14,13 +14,13 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .io import atomic_write
 
 __all__ = ["LubricationResult", "PROFILE_COLUMNS"]
 
@@ -53,19 +53,6 @@ def _json_scalar(value):
     if isinstance(value, dict):
         return {k: _json_scalar(v) for k, v in value.items()}
     return value
-
-
-def _atomic_write(path: Path, write) -> None:
-    """Write through ``write(file)`` to a temporary file beside ``path``, then rename it."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as f:
-            write(f)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 @dataclass(frozen=True, eq=False)      # eq=False: arrays have no truth value; compare fields
@@ -180,7 +167,7 @@ class LubricationResult:
         json_path, csv_path = directory / f"{stem}.json", directory / f"{stem}.csv"
         data = self.to_dict()
         data["profile_columns"] = dict(PROFILE_COLUMNS)
-        _atomic_write(json_path, lambda f: json.dump(data, f, indent=2, allow_nan=False))
+        atomic_write(json_path, lambda f: json.dump(data, f, indent=2, allow_nan=False))
 
         def write_csv(f):
             w = csv.writer(f)
@@ -189,5 +176,5 @@ class LubricationResult:
             for row in zip(*cols):
                 w.writerow([repr(float(v)) for v in row])
 
-        _atomic_write(csv_path, write_csv)
+        atomic_write(csv_path, write_csv)
         return json_path, csv_path
