@@ -2,20 +2,27 @@
 
 Layout: :mod:`bem.kernels` (numba back-end: elliptic integrals, ring Stokeslet, influence
 matrix), :mod:`bem.quadrature` (panels, singular and near-singular rules), :mod:`bem.geometry`
-(generating curves and meshes), :mod:`bem.assembly` (bordered single-layer system),
-:mod:`bem.solve` (user API), :mod:`bem.results` (result dataclass). Units: R = eta = U = 1.
+(generating curves and meshes), :mod:`bem.shape` (spectral tangent-angle curves with exact
+curvatures), :mod:`bem.assembly` (bordered single-layer system), :mod:`bem.solve` (rigid
+sphere), :mod:`bem.drop` (clean drop: direct Newton steady state, time relaxation),
+:mod:`bem.results` (result dataclasses), :mod:`bem.plotting`, :mod:`bem.cli`. Units:
+R = eta = U = 1.
 
-Public entry points: :func:`bem.solve.solve_sphere` and :func:`bem.solve.sphere_drag`.
+Public entry points: :func:`bem.solve.solve_sphere`, :func:`bem.solve.sphere_drag` and
+:func:`bem.drop.solve_drop`.
 """
 
-__all__ = ["SphereResult", "solve_sphere", "sphere_drag"]
+__all__ = ["DropResult", "SphereResult", "solve_drop", "solve_sphere", "sphere_drag"]
 
 
 def __getattr__(name):          # lazy: importing bem does not load numba
     if name in ("solve_sphere", "sphere_drag"):
         from . import solve
         return getattr(solve, name)
-    if name == "SphereResult":
-        from .results import SphereResult
-        return SphereResult
+    if name == "solve_drop":
+        from .drop import solve_drop
+        return solve_drop
+    if name in ("SphereResult", "DropResult"):
+        from . import results
+        return getattr(results, name)
     raise AttributeError(name)

@@ -9,13 +9,13 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import os
 import platform
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from lubrication.io import atomic_write
 
 __all__ = ["DROP_PROFILE_COLUMNS", "DropResult", "SphereResult", "provenance"]
 
@@ -103,19 +103,8 @@ class SphereResult:
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
         name = name or f"bem_sphere_lam{self.lam:.6g}"
-        path = directory / f"{name}.json"
-        fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{name}.", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "w") as fh:
-                json.dump(self.to_dict(), fh, indent=2, sort_keys=True)
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
-        return path
+        return atomic_write(directory / f"{name}.json",
+                            lambda fh: json.dump(self.to_dict(), fh, indent=2, sort_keys=True))
 
 
 # Columns of the CSV written by DropResult.save, with their units.
@@ -130,18 +119,7 @@ DROP_PROFILE_COLUMNS = (
 
 
 def _atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` to a temporary file beside ``path``, fsync, then rename it onto ``path``."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_write(path, lambda fh: fh.write(text))
 
 
 def _clean(v):

@@ -344,6 +344,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     from lubrication.cli import add_parser as add_lubrication   # light: solvers load on use
     add_lubrication(sub)
+    from bem.cli import add_bem_parser                          # light: numba loads on use
+    add_bem_parser(sub)
     return p
 
 

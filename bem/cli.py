@@ -1,0 +1,124 @@
+"""``vesicle-tube bem ...``: the boundary element solvers on the command line.
+
+Registered by :func:`correlations.cli.build_parser` through :func:`add_bem_parser`; the contract
+is the one of :mod:`correlations.cli` (table for people, one JSON object with ``--json``, exit
+0 / 2 invalid input with one line on stderr / 1 not converged with the JSON still printed and
+``"converged": false``). This module imports only the standard library at import time: numba,
+numpy and matplotlib load inside the command functions, so that ``vesicle-tube estimate`` stays
+fast.
+
+Units: R = 1, U the mean velocity, eta the viscosity; lam = a/R (sphere) or R0/R (drop, R0 the
+radius of the sphere of equal volume), Ca = eta U / gamma.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+__all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere"]
+
+
+def cmd_bem_sphere(args):
+    """Free rigid sphere of radius lam R on the axis of Poiseuille flow."""
+    from correlations.cli import format_rows
+
+    from .solve import solve_sphere
+    res = solve_sphere(args.lam, panels=args.panels, tol=args.tol)
+    out = {"command": "bem", "subcommand": "sphere"}
+    out.update(res.to_dict())
+    out["converged"] = bool(res.converged)
+    out["error_estimate"] = {"V_over_U": res.V_over_U_err, "dp_plus_R": res.dp_plus_R_err,
+                             "dp_plus_R0": res.dp_plus_R_err * res.lam, "drag_K": res.drag_K_err}
+    method = f"BEM, {res.panels['body']} panels x {res.panels['order']} nodes"
+    rows = [("confinement a/R", res.lam, "-", "input", ""),
+            ("speed V/U", res.V_over_U, "-", method, f"± {res.V_over_U_err:.1e}"),
+            ("extra pressure drop dp+ R/(eta U)", res.dp_plus_R, "-", method,
+             f"± {res.dp_plus_R_err:.1e}"),
+            ("extra pressure drop dp+ a/(eta U)", res.dp_plus_R0, "-", method, ""),
+            ("quiescent-tube drag K = F/(6 pi eta a V)", res.drag_K, "-", method,
+             f"± {res.drag_K_err:.1e}"),
+            ("converged", res.converged, "", "", "" if res.converged else res.message)]
+    if args.plot:
+        from correlations.cli import _save_plot
+
+        from .plotting import plot_shape
+        _save_plot(plot_shape(res), args.plot)
+    return out, format_rows(rows, f"Rigid sphere on the axis of Poiseuille flow (BEM), "
+                                  f"a/R = {res.lam:g}")
+
+
+def cmd_bem_drop(args):
+    """Steady clean drop (viscosity ratio 1, constant tension) on the axis."""
+    from correlations.cli import format_rows
+
+    from .drop import solve_drop
+    res = solve_drop(args.lam, args.ca, n_modes=args.modes, tol=args.tol)
+    out = {"command": "bem", "subcommand": "drop"}
+    out.update(res.to_dict(shape=False))
+    out["converged"] = bool(res.success)
+    if args.out:
+        paths = res.save(args.out)
+        out["files"] = [str(p) for p in paths]
+    err = res.error_estimate
+    p = res.panels
+    method = (f"BEM, {p.get('modes', '?')} modes, {p.get('drop', '?')}+{p.get('wall', '?')} "
+              f"panels" if p else "BEM")
+
+    def pm(key):
+        v = err.get(key)
+        return f"± {v:.1e}" if v is not None and math.isfinite(v) else ""
+
+    rows = [("confinement lam = R0/R", res.lam, "-", "input", ""),
+            ("capillary number Ca = eta U/gamma", res.ca, "-", "input", ""),
+            ("speed V/U", res.V_over_U, "-", method, pm("V_over_U")),
+            ("extra pressure drop dp+ R/(eta U)", res.dp_plus_R, "-", method, pm("dp_plus_R")),
+            ("extra pressure drop dp+ R0/(eta U)", res.dp_plus_R0, "-", method, pm("dp_plus_R0")),
+            ("drop length L/R", res.length, "-", method, ""),
+            ("smallest gap 1 - max r/R", res.film, "-", method, ""),
+            ("front curvature", res.curvature_front, "1/R", method, ""),
+            ("rear curvature", res.curvature_rear, "1/R", method, ""),
+            ("steady residual max|u.n - V n_x|", res.residual, "U", method, ""),
+            ("volume error", res.volume_error, "-", "panel quadrature", ""),
+            ("time", res.timings.get("total_s"), "s", "", ""),
+            ("converged", res.success, "", "", "" if res.success else res.message)]
+    if args.plot:
+        from correlations.cli import _save_plot
+
+        from .plotting import plot_shape
+        _save_plot(plot_shape(res), args.plot)
+    return out, format_rows(rows, f"Clean drop, viscosity ratio 1, on the axis of Poiseuille "
+                                  f"flow (BEM): lam = {res.lam:g}, Ca = {res.ca:g}")
+
+
+def add_bem_parser(subparsers) -> None:
+    """Add ``bem sphere`` and ``bem drop`` to the ``vesicle-tube`` subcommands."""
+    from correlations.cli import _Parser
+    logging.getLogger("bem").addHandler(logging.NullHandler())
+    b = subparsers.add_parser("bem", help="boundary element solvers: rigid sphere, clean drop")
+    sub = b.add_subparsers(dest="bem_command", required=True, parser_class=_Parser)
+
+    s = sub.add_parser("sphere", help="free rigid sphere on the axis of Poiseuille flow")
+    s.add_argument("--lam", type=float, required=True, metavar="A_OVER_R",
+                   help="sphere radius over tube radius a/R, 0 < a/R < 1 [-]")
+    s.add_argument("--panels", type=int, help="sphere panels (default: automatic refinement)")
+    s.add_argument("--tol", type=float, default=1e-10,
+                   help="relative tolerance of the refinement pair (default 1e-10) [-]")
+    s.add_argument("--plot", metavar="FILE", help="write the geometry to FILE (PNG)")
+    s.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    s.set_defaults(func=cmd_bem_sphere)
+
+    d = sub.add_parser("drop", help="steady clean drop (viscosity ratio 1) in Poiseuille flow")
+    d.add_argument("--lam", type=float, required=True,
+                   help="drop volume radius over tube radius R0/R, 0 < lam < 1 [-]")
+    d.add_argument("--ca", type=float, required=True,
+                   help="capillary number eta U/gamma, U the mean velocity, > 0 [-]")
+    d.add_argument("--modes", type=int,
+                   help="shape modes of the fine mesh (default: automatic refinement)")
+    d.add_argument("--tol", type=float, default=1e-5,
+                   help="relative tolerance of the refinement pair in V/U and dp+ "
+                        "(default 1e-5) [-]")
+    d.add_argument("--out", metavar="DIR", help="save the result as JSON + CSV shape in DIR")
+    d.add_argument("--plot", metavar="FILE", help="write the drop shape to FILE (PNG)")
+    d.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    d.set_defaults(func=cmd_bem_drop)

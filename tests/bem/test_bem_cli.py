@@ -1,0 +1,164 @@
+"""``vesicle-tube bem sphere`` and ``vesicle-tube bem drop`` against the CLI contract.
+
+Contract (correlations.cli): a table with units for people; ``--json`` prints exactly one JSON
+object; exit 0 on success, 2 on invalid input with ONE line on stderr naming the parameter and
+its valid range, 1 when a solver did not converge (JSON still printed, "converged": false).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from correlations.cli import main
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _reject_constant(name):
+    raise ValueError(f"not strict JSON: {name}")
+
+
+def strict_json(text: str) -> dict:
+    obj = json.loads(text, parse_constant=_reject_constant)
+    assert isinstance(obj, dict)
+    return obj
+
+
+def run(capsys, *argv):
+    try:
+        code = main(list(argv))
+    except SystemExit as exc:
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_sphere_table(capsys):
+    code, out, err = run(capsys, "bem", "sphere", "--lam", "0.5")
+    assert code == 0, err
+    assert "{" not in out and "speed V/U" in out and "dp+ R/(eta U)" in out
+    assert "1.68" in out
+
+
+def test_sphere_json(capsys):
+    code, out, err = run(capsys, "bem", "sphere", "--lam", "0.5", "--json")
+    assert code == 0, err
+    obj = strict_json(out)
+    assert obj["command"] == "bem" and obj["subcommand"] == "sphere"
+    for key in ("V_over_U", "dp_plus_R", "dp_plus_R0", "converged", "panels", "error_estimate"):
+        assert key in obj, key
+    assert obj["converged"] is True
+    assert obj["V_over_U"] == pytest.approx(1.68, abs=0.01)
+    assert obj["error_estimate"]["V_over_U"] < 1e-9
+
+
+@pytest.fixture(scope="module")
+def drop_json(tmp_path_factory):
+    """One cheap drop run (16 modes) with --json --out --plot, shared by the tests below."""
+    d = tmp_path_factory.mktemp("drop")
+    code = main(["bem", "drop", "--lam", "0.8", "--ca", "0.1", "--modes", "16", "--tol", "1e-3",
+                 "--json", "--out", str(d / "out"), "--plot", str(d / "shape.png")])
+    return code, d
+
+
+def test_drop_json_keys_and_files(drop_json):
+    code, d = drop_json
+    assert code == 0
+    saved = json.loads(next((d / "out").glob("*.json")).read_text())
+    for key in ("V_over_U", "dp_plus_R", "dp_plus_R0", "converged", "panels", "error_estimate"):
+        assert key in saved, key
+    assert saved["converged"] is True
+    assert saved["V_over_U"] == pytest.approx(1.4545, abs=2e-4)
+    assert saved["dp_plus_R"] == pytest.approx(2.2585, abs=2e-3)
+    assert next((d / "out").glob("*.csv")).read_text().startswith("s,x,r,psi,kappa1,kappa2")
+    assert (d / "shape.png").read_bytes()[:8] == PNG_SIGNATURE
+
+
+def test_drop_json_on_stdout(capsys):
+    code, out, err = run(capsys, "bem", "drop", "--lam", "0.3", "--ca", "0.1", "--modes", "8",
+                         "--tol", "1e-3", "--json")
+    assert code == 0, err
+    obj = strict_json(out)
+    assert obj["command"] == "bem" and obj["subcommand"] == "drop"
+    for key in ("V_over_U", "dp_plus_R", "dp_plus_R0", "converged", "panels", "error_estimate"):
+        assert key in obj, key
+    assert obj["V_over_U"] == pytest.approx(2 - 0.8 * 0.09, abs=2e-3)
+    assert "figure written" not in err
+
+
+def test_drop_table(capsys):
+    code, out, err = run(capsys, "bem", "drop", "--lam", "0.3", "--ca", "0.1", "--modes", "8",
+                         "--tol", "1e-3")
+    assert code == 0, err
+    assert "{" not in out and "speed V/U" in out and "1/R" in out and "converged" in out
+
+
+def test_not_converged_exits_1_with_the_json(capsys):
+    code, out, _ = run(capsys, "bem", "drop", "--lam", "0.5", "--ca", "0.2", "--modes", "8",
+                       "--tol", "1e-12", "--json")
+    assert code == 1
+    obj = strict_json(out)
+    assert obj["converged"] is False and "refinement pair" in obj["message"]
+
+
+@pytest.mark.parametrize("argv, needles", [
+    (["bem", "sphere", "--lam", "1.0"], ("lam", "1", "< 1")),
+    (["bem", "sphere", "--lam", "0"], ("lam", "0")),
+    (["bem", "sphere", "--lam", "nan"], ("lam", "nan")),
+    (["bem", "drop", "--lam", "1.2", "--ca", "0.1"], ("lam", "1.2", "< 1")),
+    (["bem", "drop", "--lam", "-0.5", "--ca", "0.1"], ("lam", "-0.5")),
+    (["bem", "drop", "--lam", "0.8", "--ca", "0"], ("ca", "0", "ca > 0")),
+    (["bem", "drop", "--lam", "0.8", "--ca", "-1"], ("ca", "-1")),
+    (["bem", "drop", "--lam", "nan", "--ca", "0.1"], ("lam", "nan")),
+    (["bem", "drop", "--lam", "0.8", "--ca", "inf"], ("ca", "inf")),
+    (["bem", "drop", "--lam", "0.8"], ("--ca",)),
+    (["bem", "drop", "--lam", "abc", "--ca", "0.1"], ("--lam", "abc")),
+    (["bem"], ("bem_command",)),
+])
+def test_invalid_input_exits_2_with_one_line(capsys, argv, needles):
+    code, out, err = run(capsys, *argv)
+    assert code == 2
+    assert out == ""
+    lines = err.strip("\n").splitlines()
+    assert len(lines) == 1, err
+    assert "Traceback" not in err and "error" in lines[0]
+    for n in needles:
+        assert n in lines[0], (n, lines[0])
+
+
+def test_estimate_does_not_load_numba_and_stays_fast():
+    """Registering ``bem`` must not import numba (measured: estimate 0.10-0.11 s before and
+    after the bem registration on the 2-core machine)."""
+    code = ("import sys, time; t = time.perf_counter(); from correlations.cli import main; "
+            "import contextlib, io\n"
+            "with contextlib.redirect_stdout(io.StringIO()): main(['estimate'])\n"
+            "print('numba' in sys.modules, time.perf_counter() - t)")
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                          timeout=60, check=False)
+    assert proc.returncode == 0, proc.stderr
+    loaded, elapsed = proc.stdout.split()
+    assert loaded == "False"
+    assert float(elapsed) < 2.0 and time.perf_counter() - t0 < 10
+
+
+def test_sphere_plot_is_written(capsys, tmp_path):
+    path = tmp_path / "sphere.png"
+    code, _, err = run(capsys, "bem", "sphere", "--lam", "0.4", "--plot", str(path))
+    assert code == 0
+    assert path.read_bytes()[:8] == PNG_SIGNATURE and "figure written" in err
+
+
+def test_plot_shape_labels_axes():
+    from bem.plotting import plot_shape
+    from bem.solve import solve_sphere
+    ax = plot_shape(solve_sphere(0.5, panels=4))
+    assert ax.get_xlabel() == "x/R [-]" and ax.get_ylabel() == "r/R [-]"
+    assert "λ = 0.5" in ax.get_title()
