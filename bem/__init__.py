@@ -5,6 +5,7 @@ matrix), :mod:`bem.quadrature` (panels, singular and near-singular rules), :mod:
 (generating curves and meshes), :mod:`bem.shape` (spectral tangent-angle curves with exact
 curvatures), :mod:`bem.assembly` (bordered single-layer system), :mod:`bem.solve` (rigid
 sphere), :mod:`bem.drop` (clean drop: direct Newton steady state, time relaxation),
+:mod:`bem.membrane` (bending and tension forces), :mod:`bem.vesicle` (steady vesicle),
 :mod:`bem.results` (result dataclasses), :mod:`bem.plotting`, :mod:`bem.cli`. Units:
 R = eta = U = 1.
 
@@ -12,7 +13,8 @@ Public entry points: :func:`bem.solve.solve_sphere`, :func:`bem.solve.sphere_dra
 :func:`bem.drop.solve_drop`.
 """
 
-__all__ = ["DropResult", "SphereResult", "solve_drop", "solve_sphere", "sphere_drag"]
+__all__ = ["DropResult", "SphereResult", "VesicleResult", "solve_drop", "solve_sphere",
+           "solve_vesicle", "sphere_drag"]
 
 
 def __getattr__(name):          # lazy: importing bem does not load numba
@@ -22,7 +24,10 @@ def __getattr__(name):          # lazy: importing bem does not load numba
     if name == "solve_drop":
         from .drop import solve_drop
         return solve_drop
-    if name in ("SphereResult", "DropResult"):
+    if name == "solve_vesicle":
+        from .vesicle import solve_vesicle
+        return solve_vesicle
+    if name in ("SphereResult", "DropResult", "VesicleResult"):
         from . import results
         return getattr(results, name)
     raise AttributeError(name)

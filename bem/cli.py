@@ -16,7 +16,7 @@ from __future__ import annotations
 import logging
 import math
 
-__all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere"]
+__all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere", "cmd_bem_vesicle"]
 
 
 def cmd_bem_sphere(args):
@@ -91,11 +91,60 @@ def cmd_bem_drop(args):
                                   f"flow (BEM): lam = {res.lam:g}, Ca = {res.ca:g}")
 
 
+def cmd_bem_vesicle(args):
+    """Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the axis."""
+    from correlations.cli import format_rows
+
+    from .vesicle import solve_vesicle
+    res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
+                        n_modes=args.modes, tol=args.tol)
+    out = {"command": "bem", "subcommand": "vesicle"}
+    out.update(res.to_dict(shape=False))
+    out["converged"] = bool(res.success)
+    if args.out:
+        paths = res.save(args.out)
+        out["files"] = [str(p) for p in paths]
+    err = res.error_estimate
+    p = res.panels
+    method = (f"BEM, {p.get('modes', '?')} modes, {p.get('drop', '?')}+{p.get('wall', '?')} "
+              f"panels" if p else "BEM")
+
+    def pm(key):
+        v = err.get(key)
+        return f"± {v:.1e}" if v is not None and math.isfinite(v) else ""
+
+    rows = [("reduced volume nu", res.nu, "-", "input", ""),
+            ("confinement lam = R0/R", res.lam, "-", "input", f"lam/lam_c = {res.lam_ratio:.4g}"),
+            ("bending capillary number Ca_B = eta U R0^2/kappa", res.ca_b, "-", "input", ""),
+            ("speed V/U", res.V_over_U, "-", method, pm("V_over_U")),
+            ("extra pressure drop dp+ R0/(eta U)", res.dp_plus_R0, "-", method, pm("dp_plus_R0")),
+            ("length L/R", res.ell, "-", method, ""),
+            ("smallest gap h/R", res.film_min, "-", method, ""),
+            ("largest tension gamma_max/(eta U)", res.tension_max, "-", method,
+             pm("tension_max")),
+            ("rear / front curvature (neg. convex)",
+             f"{res.curvature_rear:.4g} / {res.curvature_front:.4g}", "1/R", method, ""),
+            ("shape class", res.shape_class, "", method, ""),
+            ("steady residual max|u - V e_x|", res.residual, "U", method, ""),
+            ("volume / area error", f"{res.volume_error:.1e} / {res.area_error:.1e}", "-",
+             "panel quadrature", ""),
+            ("time", res.timings.get("total_s"), "s", "", ""),
+            ("converged", res.success, "", "", "" if res.success else res.message)]
+    if args.plot:
+        from correlations.cli import _save_plot
+
+        from .plotting import plot_shape
+        _save_plot(plot_shape(res), args.plot)
+    return out, format_rows(rows, f"Vesicle, viscosity ratio 1, on the axis of Poiseuille flow "
+                                  f"(BEM): nu = {res.nu:g}, lam = {res.lam:g}, "
+                                  f"Ca_B = {res.ca_b:g}")
+
+
 def add_bem_parser(subparsers) -> None:
     """Add ``bem sphere`` and ``bem drop`` to the ``vesicle-tube`` subcommands."""
     from correlations.cli import _Parser
     logging.getLogger("bem").addHandler(logging.NullHandler())
-    b = subparsers.add_parser("bem", help="boundary element solvers: rigid sphere, clean drop")
+    b = subparsers.add_parser("bem", help="boundary element solvers: rigid sphere, clean drop, vesicle")
     sub = b.add_subparsers(dest="bem_command", required=True, parser_class=_Parser)
 
     s = sub.add_parser("sphere", help="free rigid sphere on the axis of Poiseuille flow")
@@ -122,3 +171,22 @@ def add_bem_parser(subparsers) -> None:
     d.add_argument("--plot", metavar="FILE", help="write the drop shape to FILE (PNG)")
     d.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     d.set_defaults(func=cmd_bem_drop)
+
+    v = sub.add_parser("vesicle", help="steady vesicle (inextensible bending membrane, "
+                                       "viscosity ratio 1) in Poiseuille flow")
+    v.add_argument("--nu", type=float, required=True, help="reduced volume, 0 < nu < 1 [-]")
+    g = v.add_mutually_exclusive_group(required=True)
+    g.add_argument("--lam", type=float, help="confinement R0/R, 0 < lam < lam_c(nu) [-]")
+    g.add_argument("--lam-ratio", type=float, dest="lam_ratio",
+                   help="confinement over critical lam/lam_c, 0 < ratio < 1 [-]")
+    v.add_argument("--ca-b", type=float, default=50.0, dest="ca_b",
+                   help="bending capillary number eta U R0^2/kappa (default 50) [-]")
+    v.add_argument("--modes", type=int,
+                   help="shape modes of the fine mesh (default: automatic refinement)")
+    v.add_argument("--tol", type=float, default=1e-4,
+                   help="relative tolerance of the refinement pair in V/U, dp+ and "
+                        "gamma_max (default 1e-4) [-]")
+    v.add_argument("--out", metavar="DIR", help="save the result as JSON + CSV profiles in DIR")
+    v.add_argument("--plot", metavar="FILE", help="write the vesicle shape to FILE (PNG)")
+    v.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    v.set_defaults(func=cmd_bem_vesicle)

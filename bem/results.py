@@ -17,7 +17,8 @@ import numpy as np
 
 from lubrication.io import atomic_write
 
-__all__ = ["DROP_PROFILE_COLUMNS", "DropResult", "SphereResult", "provenance"]
+__all__ = ["DROP_PROFILE_COLUMNS", "VESICLE_PROFILE_COLUMNS", "DropResult", "SphereResult",
+           "VesicleResult", "provenance"]
 
 
 def provenance() -> dict:
@@ -262,6 +263,149 @@ class DropResult:
                                                  allow_nan=False))
         lines = [",".join(name for name, _ in DROP_PROFILE_COLUMNS)]
         cols = [np.asarray(getattr(self, name)) for name, _ in DROP_PROFILE_COLUMNS]
+        lines += [",".join(repr(float(v)) for v in row) for row in zip(*cols)]
+        _atomic_write_text(csv_path, "\n".join(lines) + "\n")
+        return json_path, csv_path
+
+
+# Columns of the CSV written by VesicleResult.save, with their units.
+VESICLE_PROFILE_COLUMNS = (
+    ("s", "arc length from the rear pole [R]"),
+    ("x", "axial position from the rear pole [R]"),
+    ("r", "membrane radius [R]"),
+    ("psi", "tangent angle from the axis [rad]"),
+    ("tension", "membrane tension gamma, Lagrange multiplier of inextensibility [eta U]"),
+    ("shear_membrane", "viscous shear stress on the membrane, -dgamma/ds [eta U / R]"),
+)
+
+
+@dataclass(frozen=True, eq=False)      # eq=False: arrays have no truth value
+class VesicleResult:
+    r"""Steady vesicle (inextensible Helfrich membrane, viscosity ratio 1) in a tube (BEM).
+
+    Scalings: R = 1, U the mean velocity of the undisturbed Poiseuille flow, eta the viscosity;
+    ``nu`` reduced volume, ``lam`` = R0/R, ``lam_c`` critical confinement, ``ca_b`` = ηUR0²/κ.
+
+    A result whose ``success`` is False carries the best numbers found (NaN where there are
+    none) and must not be used as converged; ``message`` says why.
+
+    Attributes
+    ----------
+    V_over_U : float
+        Vesicle velocity over U [-].
+    dp_plus_R0, dp_plus_R : float
+        Extra pressure drop at fixed flow rate, Δp⁺R0/(ηU) and Δp⁺R/(ηU) [-].
+    ell, film_min : float
+        Length L/R and smallest gap 1 − max r [R].
+    tension_max, tension_rear, tension_front : float
+        Largest tension and its pole values [ηU].
+    curvature_rear, curvature_front : float
+        Principal curvature at the poles in the convention of
+        :class:`lubrication.results.LubricationResult` (negative where convex) [1/R].
+    shape_class : str
+        "parachute" (concave rear, or the rear pole ahead of the rearmost point) or "bullet".
+    error_estimate : dict
+        |fine − coarse| of the refinement pair for V_over_U, dp_plus_R0, tension_max.
+    volume_error, area_error : float
+        Relative errors of the volume and area by panel quadrature of the fine mesh.
+    residual : float
+        max |u − V e_x| over the membrane nodes of the fine mesh (both components) [U].
+    refinement : list
+        (modes, residual, V/U, Δp⁺R0/(ηU), γ_max) of every level solved.
+    seed : str
+        Origin of the initial shape ("lubrication", "spheroid", "initial").
+    s, x, r, psi, tension, shear_membrane : ndarray
+        Profiles from rear to front pole, see :data:`VESICLE_PROFILE_COLUMNS`.
+    modes, density, tension_modes : ndarray
+        Spectral shape and tension coefficients of the fine solution (warm starts).
+    """
+
+    nu: float
+    lam: float
+    lam_c: float
+    ca_b: float
+    success: bool
+    message: str
+    V_over_U: float = math.nan
+    dp_plus_R0: float = math.nan
+    dp_plus_R: float = math.nan
+    ell: float = math.nan
+    film_min: float = math.nan
+    tension_max: float = math.nan
+    tension_rear: float = math.nan
+    tension_front: float = math.nan
+    curvature_rear: float = math.nan
+    curvature_front: float = math.nan
+    shape_class: str = ""
+    error_estimate: dict = field(default_factory=dict)
+    volume_error: float = math.nan
+    area_error: float = math.nan
+    residual: float = math.nan
+    tol: float = math.nan
+    residual_tol: float = math.nan
+    panels: dict = field(default_factory=dict)
+    refinement: list = field(default_factory=list)
+    seed: str = ""
+    iterations: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+    s: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    x: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    r: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    psi: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    tension: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    shear_membrane: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    modes: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    density: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    tension_modes: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    provenance: dict = field(default_factory=provenance, repr=False)
+
+    @property
+    def converged(self) -> bool:
+        """Alias of ``success`` (the CLI's key)."""
+        return self.success
+
+    @property
+    def lam_ratio(self) -> float:
+        return self.lam / self.lam_c
+
+    def curve(self):
+        """The fine solution's :class:`bem.shape.SpectralCurve` (centroid at x = 0)."""
+        from .shape import SpectralCurve
+        return SpectralCurve.closed(self.modes, volume=4.0 / 3.0 * math.pi * self.lam**3,
+                                    density=self.density)
+
+    _SCALARS = ("nu", "lam", "lam_c", "ca_b", "success", "message", "V_over_U", "dp_plus_R0",
+                "dp_plus_R", "ell", "film_min", "tension_max", "tension_rear", "tension_front",
+                "curvature_rear", "curvature_front", "shape_class", "error_estimate",
+                "volume_error", "area_error", "residual", "tol", "residual_tol", "panels",
+                "refinement", "seed", "iterations", "timings", "provenance")
+
+    def to_dict(self, shape: bool = True) -> dict:
+        """Scalars, diagnostics and provenance as a JSON-ready dict (non-finite -> None).
+
+        With ``shape`` the profiles x, r, tension and the spectral coefficients are included.
+        """
+        out = {k: _clean(getattr(self, k)) for k in self._SCALARS}
+        out["converged"] = bool(self.success)
+        out["lam_ratio"] = _clean(self.lam_ratio)
+        if shape:
+            out["shape"] = {k: _clean(getattr(self, k)) for k in
+                            ("x", "r", "tension", "modes", "density", "tension_modes")}
+        return out
+
+    def save(self, directory, stem: str | None = None) -> tuple[Path, Path]:
+        """Write ``<stem>.json`` and ``<stem>.csv`` (profiles) atomically into ``directory``.
+        Default stem ``bem_vesicle_nu<nu>_lam<lam>_cab<ca_b>``."""
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        stem = stem or f"bem_vesicle_nu{self.nu:.6g}_lam{self.lam:.6g}_cab{self.ca_b:.6g}"
+        json_path, csv_path = directory / f"{stem}.json", directory / f"{stem}.csv"
+        data = self.to_dict()
+        data["profile_columns"] = dict(VESICLE_PROFILE_COLUMNS)
+        _atomic_write_text(json_path, json.dumps(data, indent=2, sort_keys=True,
+                                                 allow_nan=False))
+        lines = [",".join(name for name, _ in VESICLE_PROFILE_COLUMNS)]
+        cols = [np.asarray(getattr(self, name)) for name, _ in VESICLE_PROFILE_COLUMNS]
         lines += [",".join(repr(float(v)) for v in row) for row in zip(*cols)]
         _atomic_write_text(csv_path, "\n".join(lines) + "\n")
         return json_path, csv_path

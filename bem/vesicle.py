@@ -1,0 +1,486 @@
+r"""Steady vesicle (inextensible Helfrich membrane, viscosity ratio 1) in a tube, solved directly.
+
+Nondimensionalisation (stated once): tube radius R = 1, outer viscosity eta = 1, mean velocity of
+the undisturbed Poiseuille flow U = 1 (:math:`u^\infty = 2(1 - r^2)e_x`). The vesicle has the
+volume of a sphere of radius :math:`R_0 = \lambda R` and the area of a sphere of radius
+:math:`R_A = R_0\nu^{-1/3}`; bending modulus :math:`\kappa = \lambda^2/\mathrm{Ca}_B` in
+:math:`\eta U R^2` (Ca_B = ηUR0²/κ); tension in ηU.
+
+Physics (Chen et al. 2020 §II, eq. E:fm; Pozrikidis 1992): the membrane loads the fluid with
+:math:`q = f_b + f_\gamma` (:mod:`bem.membrane`); with equal viscosities the velocity is the
+single layer of :math:`q` over the membrane plus the wall and inlet layers of the tube problem
+(:mod:`bem.drop`, :mod:`bem.assembly`). In the frame moving with the vesicle a steady,
+axisymmetric, inextensible membrane is at rest (r w_s = const = 0 from the poles), so the
+steady state is a shape, a tension :math:`\gamma(\tau)` and a speed V with
+
+.. math:: u(X_i) = V e_x \quad\text{at every membrane node (both components)},
+
+volume, area and centroid fixed. Two rows are redundant at the solution (the null vector n of
+the single layer and the global area-rate identity): the equations are solved in least squares.
+
+Method:
+
+* shape: :class:`bem.shape.SpectralCurve` with N sine modes of the tangent angle; c_1 closes the
+  curve, the length fixes the volume, the shift centres it (as for the drop), and one more mode
+  (the ``area_mode``, the one with the largest effect on the area at the start) is solved for so
+  that the area is exact. Volume, area and centring therefore hold to round-off.
+* tension :math:`\gamma = \sum_{k=0}^{M-1} g_k\cos(k\pi\tau)` and V enter linearly: for each
+  shape they are the linear least-squares solution (variable projection, Golub & Pereyra 1973),
+  so the nonlinear unknowns are the N - 2 free shape modes.
+* the weighted residual :math:`\sqrt{w_i}(u_i - V e_x)` (both components) is minimised by
+  Levenberg–Marquardt with a forward-difference Jacobian (:func:`scipy.optimize.least_squares`);
+  its floor falls spectrally with N, and the refinement pair gives the error estimate.
+* the wall, inlet and panel breaks are those of :class:`bem.drop.DropOperator`, fixed during one
+  solve so that the residual is a smooth function of the modes.
+
+Initial shapes: the lubrication solution at the same (ν, λ, Ca_B)
+(:func:`lubrication.solve.solve_lubrication`) mapped to the spectral curve with
+:func:`bem.shape.fit_curve`; if it fails, a prolate spheroid of the right ν.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+import numpy as np
+import scipy.linalg as sla
+from scipy.interpolate import CubicSpline
+from scipy.optimize import least_squares
+
+from lubrication.checks import InvalidParameterError, check_positive, check_range
+from lubrication.geometry import check_passes, critical_confinement
+
+from .assembly import poiseuille
+from .drop import DropDiscretisation, DropOperator, _panels_for
+from .membrane import bending_force, tension_basis, tension_profile
+from .quadrature import DEFAULT_ORDER, influence
+from .shape import SpectralCurve, equidistributing_density, fit_curve, spheroid_curve
+
+__all__ = ["VesicleOperator", "fit_lubrication", "lubrication_seed", "solve_vesicle", "spheroid_seed"]
+
+log = logging.getLogger(__name__)
+
+_EIGHT_PI = 8.0 * math.pi
+
+
+# ---------------------------------------------------------------------------- operator
+class VesicleOperator(DropOperator):
+    """Velocity of a membrane of given shape in the tube, tension and V by least squares.
+
+    Wall, inlet, panel breaks and density are fixed from ``reference`` (as for the drop).
+    ``n_tension`` cosine terms of the tension; ``area_mode`` the index of the mode solved for
+    the area (default: the free mode with the largest area derivative at ``reference``).
+    """
+
+    def __init__(self, nu: float, lam: float, ca_b: float, disc: DropDiscretisation,
+                 reference: SpectralCurve, n_tension: int | None = None,
+                 area_mode: int | None = None):
+        super().__init__(lam, 1.0, disc, reference)
+        self.nu = float(nu)
+        self.ca_b = float(ca_b)
+        self.kappa = self.lam**2 / self.ca_b
+        self.area = 4.0 * math.pi * (self.lam * self.nu ** (-1.0 / 3.0)) ** 2
+        self.n_tension = int(n_tension or disc.n_modes)
+        modes = reference.with_modes(disc.n_modes)
+        self.area_mode = self._pick_area_mode(modes) if area_mode is None else int(area_mode)
+
+    def _raw_curve(self, modes) -> SpectralCurve:
+        return SpectralCurve.closed(modes, volume=self.volume, centroid=0.0,
+                                    density=self.density)
+
+    def _pick_area_mode(self, modes) -> int:
+        base = self._raw_curve(modes).area()
+        best, j_best = -1.0, 1
+        for j in range(1, min(modes.size, 6)):
+            m = modes.copy()
+            m[j] += 1e-6
+            d = abs(self._raw_curve(m).area() - base)
+            if d > best:
+                best, j_best = d, j
+        return j_best
+
+    def curve(self, modes) -> SpectralCurve:
+        """Closed, centred curve of the vesicle's volume and area; ``modes[area_mode]`` is
+        replaced by the value that gives the area (secant iteration from the given value)."""
+        m = np.array(modes, dtype=float)
+        j = self.area_mode
+        h = 1e-4 * max(1.0, abs(m[j]))
+        c0 = m[j]
+        f0 = self._raw_curve(m).area() - self.area
+        m[j] = c0 + h
+        f1 = self._raw_curve(m).area() - self.area
+        x0, x1 = c0, c0 + h
+        for _ in range(40):
+            if abs(f1) < 1e-14 * self.area:
+                break
+            if f1 == f0:
+                raise InvalidParameterError("modes", "a shape whose area cannot be adjusted",
+                                            "a shape near the vesicle's area")
+            x0, x1, f0 = x1, x1 - f1 * (x1 - x0) / (f1 - f0), f1
+            m[j] = x1
+            f1 = self._raw_curve(m).area() - self.area
+        else:
+            raise InvalidParameterError("modes", "a shape whose area cannot be adjusted",
+                                        "a shape near the vesicle's area")
+        return self._raw_curve(m)
+
+    def free(self, modes) -> np.ndarray:
+        """The nonlinear unknowns: modes without c_1 and the area mode."""
+        keep = np.ones(len(modes), dtype=bool)
+        keep[[0, self.area_mode]] = False
+        return np.asarray(modes, dtype=float)[keep]
+
+    def full(self, z, template) -> np.ndarray:
+        m = np.array(template, dtype=float)
+        keep = np.ones(m.size, dtype=bool)
+        keep[[0, self.area_mode]] = False
+        m[keep] = z
+        return m
+
+    def evaluate(self, curve: SpectralCurve) -> dict:
+        """Flow of the membrane ``curve``: the least-squares tension and V, the residual."""
+        tol = self.disc.quad_tol
+        drop = self.panels(curve)
+        if np.max(drop.r) >= 1.0 - 1e-6:
+            raise InvalidParameterError("shape", "a membrane touching the wall (closing film)",
+                                        "a vesicle inside the tube (max r < 1)")
+        tau = self.tau.ravel()
+        nd = tau.size
+        fb = bending_force(curve, tau, self.kappa)
+        T = tension_basis(curve, tau, self.n_tension)                   # (M, 2, nd)
+        Q = np.empty((2 * nd, self.n_tension + 1))
+        Q[0::2, 0], Q[1::2, 0] = fb
+        Q[0::2, 1:], Q[1::2, 1:] = T[:, 0].T, T[:, 1].T
+        rb, wb = drop.r.ravel(), drop.w.ravel()
+        dp = -4.0 * (rb * (1.0 - rb * rb) * wb) @ Q[0::2]                # per column
+        w = self.wall
+        tx = np.concatenate([drop.x.ravel(), w.x.ravel()])
+        tr = np.concatenate([rb, w.r.ravel()])
+        A = influence(tx, tr, drop, tol=tol)
+        B = influence(drop.x.ravel(), rb, w, tol=tol)
+        inl = influence(drop.x.ravel(), rb, self.inlet, tol=tol)
+        col_dp = inl[:, 0::2].sum(axis=1) / _EIGHT_PI
+        AQ = (A @ Q) / _EIGHT_PI
+        qw = -sla.lu_solve(self.lu_wall, AQ[2 * nd:] + np.outer(self.col_dp_wall, dp))
+        Uc = AQ[: 2 * nd] + (B @ qw) / _EIGHT_PI + np.outer(col_dp, dp)
+        u0 = Uc[:, 0].copy()
+        u0[0::2] += poiseuille(rb)
+        sw = np.repeat(np.sqrt(wb), 2)
+        ex = np.zeros(2 * nd)
+        ex[0::2] = 1.0
+        M = np.column_stack([Uc[:, 1:], -ex]) * sw[:, None]
+        sol, *_ = np.linalg.lstsq(M, -u0 * sw, rcond=1e-13)
+        F = u0 * sw + M @ sol
+        g, V = sol[:-1], float(sol[-1])
+        res = F / sw
+        self.evaluations += 1
+        return {"curve": curve, "panels": drop, "F": F, "g": g, "V": V,
+                "dp": float(dp[0] + dp[1:] @ g), "residual": float(np.max(np.abs(res))),
+                "res_x": res[0::2], "res_r": res[1::2]}
+
+
+# ---------------------------------------------------------------------------- initial shapes
+def lubrication_seed(nu: float, lam: float, ca_b: float, n_modes: int):
+    """Spectral curve fitted to the lubrication solution at (nu, lam, ca_b); None if it fails.
+    Returns (curve, lubrication result)."""
+    from lubrication.solve import solve_lubrication
+
+    lub = solve_lubrication(nu, lam, ca_b=ca_b)
+    if not lub.success:
+        return None, lub
+    return fit_lubrication(lub, n_modes), lub
+
+
+def fit_lubrication(lub, n_modes: int) -> SpectralCurve:
+    """Spectral curve with ``n_modes`` modes fitted to a converged LubricationResult's shape."""
+    s = np.asarray(lub.s)
+    keep = np.concatenate([[True], np.diff(s) > 1e-12])
+    s, x, r, psi = s[keep], np.asarray(lub.x)[keep], np.asarray(lub.r)[keep], \
+        np.asarray(lub.psi)[keep]
+    sx, sr, sp = CubicSpline(s, x), CubicSpline(s, r), CubicSpline(s, psi)
+
+    def curve(t):
+        t = np.asarray(t, dtype=float)
+        p = sp(t)
+        return sx(t), np.clip(sr(t), 0.0, None), np.cos(p), -np.sin(p)
+
+    return fit_curve(curve, float(s[0]), float(s[-1]), n_modes)
+
+
+def spheroid_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
+    """Prolate spheroid (axis along the tube) of reduced volume ``nu`` and volume 4/3 pi lam^3."""
+    def nu_of(e):                                         # e = b/a <= 1, prolate
+        c = fit_curve(spheroid_curve(1.0, e), 0.0, math.pi, 32)
+        return 6.0 * math.sqrt(math.pi) * c.volume() * c.area() ** -1.5
+    lo, hi = 0.05, 1.0
+    for _ in range(50):                                   # bisection: nu increases with e
+        mid = 0.5 * (lo + hi)
+        if nu_of(mid) < nu:
+            lo = mid
+        else:
+            hi = mid
+    e = 0.5 * (lo + hi)
+    c = fit_curve(spheroid_curve(1.0, e), 0.0, math.pi, n_modes)
+    return SpectralCurve.closed(c.modes, volume=4.0 / 3.0 * math.pi * lam**3)
+
+
+# ---------------------------------------------------------------------------- one level
+def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, max_nfev):
+    """Levenberg–Marquardt at one resolution from ``seed``; returns (state, op, info)."""
+    ref = fit_curve(seed.sample, 0.0, 1.0, disc.n_modes, density=seed.density) \
+        if seed.n_modes != disc.n_modes else seed
+    op = VesicleOperator(nu, lam, ca_b, disc, ref, n_tension)
+    template = op.curve(ref.modes).modes.copy()
+    z0 = op.free(template)
+    penalty = [None]
+
+    def fun(z):
+        try:
+            st = op.evaluate(op.curve(op.full(z, template)))
+        except InvalidParameterError:
+            if penalty[0] is None:
+                raise
+            return penalty[0]
+        return st["F"]
+
+    F0 = fun(z0)
+    penalty[0] = np.full_like(F0, 10.0 * max(1.0, float(np.max(np.abs(F0)))))
+    ev0 = op.evaluations
+    sol = least_squares(fun, z0, method="lm", x_scale="jac", xtol=xtol, ftol=1e-14,
+                        gtol=1e-15, max_nfev=max_nfev)
+    state = op.evaluate(op.curve(op.full(sol.x, template)))
+    info = {"status": int(sol.status), "message": sol.message, "nfev": int(sol.nfev),
+            "evaluations": op.evaluations - ev0 + 1, "norm0": float(np.linalg.norm(F0)),
+            "norm": float(np.linalg.norm(state["F"])), "area_mode": op.area_mode}
+    return state, op, info
+
+
+# ---------------------------------------------------------------------------- outputs
+def _cross(u, v):
+    """z-component of the cross product of 2-vectors (last axis)."""
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def _self_intersects(x, r) -> bool:
+    """Whether the polyline (x, r) crosses itself or the axis inside (O(n^2), n ~ 400)."""
+    if np.any(r[1:-1] <= 0.0):
+        return True
+    p = np.column_stack([x, r])
+    a, b = p[:-1], p[1:]
+    n = len(a)
+    for i in range(n - 2):
+        c, d = a[i + 2:], b[i + 2:]
+        if i == 0:
+            c, d = c[:-1], d[:-1]                         # first and last share the axis
+        d1 = _cross(b[i] - a[i], c - a[i])
+        d2 = _cross(b[i] - a[i], d - a[i])
+        d3 = _cross(d - c, a[i] - c)
+        d4 = _cross(d - c, b[i] - c)
+        if np.any((d1 * d2 < 0) & (d3 * d4 < 0)):
+            return True
+    return False
+
+
+def _outputs(nu, lam, op: VesicleOperator, st: dict) -> dict:
+    curve, p = st["curve"], st["panels"]
+    rb, wb = p.r.ravel(), p.w.ravel()
+    vol = float(math.pi * np.sum(rb**2 * p.tx.ravel() * wb))
+    area = float(2.0 * math.pi * np.sum(rb * wb))
+    xr, xf = curve.extent()
+    return {"V_over_U": st["V"], "dp_plus_R": st["dp"], "dp_plus_R0": st["dp"] * lam,
+            "ell": xf - xr, "film_min": 1.0 - curve.max_radius(), "residual": st["residual"],
+            "volume_error": abs(vol / op.volume - 1.0), "area_error": abs(area / op.area - 1.0),
+            "tension_max": float(np.max(tension_profile(curve, st["g"],
+                                                        np.linspace(0, 1, 401))[0])),
+            "panels": op.panel_counts | {"tension": op.n_tension}}
+
+
+_KEYS = ("V_over_U", "dp_plus_R0", "tension_max")
+
+
+def _check_inputs(nu, lam, lam_ratio, ca_b):
+    nu = float(check_range("nu", nu, 0.0, 1.0, lo_open=True, hi_open=True,
+                           reason="a vesicle with excess area (nu < 1) is needed"))
+    if (lam is None) == (lam_ratio is None):
+        raise InvalidParameterError("lam", lam, "give exactly one of lam and lam_ratio")
+    lam_c = float(critical_confinement(nu))
+    if lam is None:
+        lam = float(check_positive("lam_ratio", lam_ratio, reason="lam_ratio = lam/lam_c")) * lam_c
+    lam = float(check_positive("lam", lam))
+    check_passes(nu, lam)
+    ca_b = float(check_positive("ca_b", ca_b, reason="Ca_B = eta U R0^2/kappa"))
+    if not math.isfinite(ca_b):
+        raise InvalidParameterError("ca_b", ca_b, "a finite positive number")
+    return nu, lam, lam_c, ca_b
+
+
+def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | None = None,
+                  ca_b: float = 50.0, initial=None, n_modes: int | None = None,
+                  tol: float = 1e-4, residual_tol: float = 1e-4, max_modes: int = 40,
+                  order: int = DEFAULT_ORDER, xtol: float = 1e-10, max_nfev: int = 60,
+                  density_terms: int = 0):
+    r"""Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the tube axis.
+
+    Parameters
+    ----------
+    nu : float
+        Reduced volume, 0 < nu < 1 [-].
+    lam, lam_ratio : float
+        Confinement R0/R, or lam/lam_c; exactly one, 0 < lam < lam_c(nu) [-].
+    ca_b : float
+        Bending capillary number ηUR0²/κ (Chen et al. 2020 use 50) [-].
+    initial : VesicleResult, SpectralCurve or LubricationResult, optional
+        Initial shape. Default: the lubrication solution at the same parameters, else a
+        prolate spheroid of the right nu.
+    n_modes : int, optional
+        Shape modes of the fine level (the coarse level has round(2n/3)); default automatic,
+        16, 24, 32, ... up to ``max_modes`` until the last pair agrees to ``tol`` (relative, in
+        V/U, Δp⁺ and γ_max) with the pointwise residual max|u − V e_x| below ``residual_tol``.
+    order : int
+        Gauss nodes per panel.
+    xtol, max_nfev : float, int
+        Step tolerance and evaluation budget of each Levenberg–Marquardt level.
+    density_terms : int
+        Cosine terms of an arc-length density built from the seed's curvature
+        (:func:`bem.shape.equidistributing_density`), which concentrates modes and panels at
+        the sharp bends of the film transition near lam_c; 0 (default) keeps uniform arc length.
+
+    Returns
+    -------
+    VesicleResult
+        ``success`` False with the reason in ``message`` when the solver did not converge, the
+        shape self-intersects or touches the wall, or the refinement pair disagrees.
+
+    Raises
+    ------
+    InvalidParameterError, CannotPassError
+        Bad input; lam >= lam_c(nu).
+    """
+    from lubrication.results import LubricationResult
+
+    from .results import VesicleResult
+
+    t_start = time.perf_counter()
+    nu, lam, lam_c, ca_b = _check_inputs(nu, lam, lam_ratio, ca_b)
+    tol = float(check_range("tol", tol, 1e-12, 0.5))
+    residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 10.0))
+    max_modes = int(check_range("max_modes", max_modes, 8, 256))
+    if n_modes is not None:
+        n_modes = int(check_range("n_modes", n_modes, 8, 256))
+        sequence = [max(6, round(2 * n_modes / 3)), n_modes]
+    else:
+        sequence = list(range(16, max_modes + 1, 8))
+    seed_source = "initial"
+    if isinstance(initial, SpectralCurve):
+        seed = initial
+    elif isinstance(initial, LubricationResult) or initial is None:
+        seed = None
+        if initial is None:
+            seed, _ = lubrication_seed(nu, lam, ca_b, sequence[0])
+            seed_source = "lubrication"
+        elif initial.success:
+            seed = fit_lubrication(initial, sequence[0])
+        if seed is None:
+            seed = spheroid_seed(nu, lam, sequence[0])
+            seed_source = "spheroid"
+    elif isinstance(initial, VesicleResult):
+        seed = initial.curve()
+    else:
+        raise InvalidParameterError("initial", type(initial).__name__,
+                                    "a VesicleResult, SpectralCurve, LubricationResult or None")
+    density_terms = int(check_range("density_terms", density_terms, 0, 64))
+    if density_terms:
+        seed = fit_curve(seed.sample, 0.0, 1.0, sequence[0],
+                         density=equidistributing_density(seed, density_terms))
+    levels, timings, iterations = [], {}, {}
+    message = ""
+    prev = seed
+    for n in sequence:
+        disc = DropDiscretisation(n_modes=n, n_panels=_panels_for(n), order=order)
+        t0 = time.perf_counter()
+        try:
+            st, op, info = _solve_level(nu, lam, ca_b, disc, prev, n, xtol=xtol,
+                                        max_nfev=max_nfev * n)
+        except InvalidParameterError as exc:
+            message = f"level with {n} modes: {exc}"
+            break
+        timings[f"modes{n}_s"] = time.perf_counter() - t0
+        iterations[f"modes{n}"] = info
+        out = _outputs(nu, lam, op, st)
+        levels.append((st, op, out))
+        log.info("solve_vesicle nu=%g lam=%g modes=%d: V/U=%.10f dp+R0=%.8g gmax=%.6g "
+                 "residual %.2e (%s)", nu, lam, n, out["V_over_U"], out["dp_plus_R0"],
+                 out["tension_max"], out["residual"], info["message"])
+        if info["status"] <= 0:
+            message = f"Levenberg–Marquardt failed with {n} modes: {info['message']}"
+            break
+        prev = st["curve"]
+        if len(levels) >= 2:
+            c, f = levels[-2][2], levels[-1][2]
+            if (all(abs(f[k] - c[k]) <= tol * abs(f[k]) for k in _KEYS)
+                    and f["residual"] <= residual_tol):
+                break
+    timings["total_s"] = time.perf_counter() - t_start
+    if not levels:
+        return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=False,
+                             message=message, tol=tol, residual_tol=residual_tol,
+                             iterations=iterations, timings=timings)
+    st, op, fine = levels[-1]
+    coarse = levels[-2][2] if len(levels) >= 2 else None
+    err = ({k: abs(fine[k] - coarse[k]) for k in _KEYS} if coarse is not None
+           else {k: math.nan for k in _KEYS})
+    curve = st["curve"]
+    prof = _profile(curve, st["g"])
+    problems = [message] if message else []
+    if _self_intersects(prof["x"], prof["r"]):
+        problems.append("the membrane self-intersects")
+    if fine["film_min"] < 1e-3:
+        problems.append(f"the film closes (min gap {fine['film_min']:.2e} R)")
+    bad = [k for k in _KEYS if not err[k] <= tol * abs(fine[k])]
+    if bad:
+        problems.append(f"refinement pair differs by more than tol={tol:g} in "
+                        + ", ".join(f"{k} ({err[k] / abs(fine[k]):.1e})" for k in bad))
+    if not fine["residual"] <= residual_tol:
+        problems.append(f"steady residual max|u - V e_x| = {fine['residual']:.2e} exceeds "
+                        f"residual_tol={residual_tol:g}")
+    success = not problems
+    message = ("; ".join(problems) if problems else
+               f"converged: {fine['panels']['modes']} modes, pair differences "
+               + ", ".join(f"{k} {err[k]:.1e}" for k in _KEYS)
+               + f", residual {fine['residual']:.1e}")
+    if not success:
+        log.warning("solve_vesicle(nu=%g, lam=%g): %s", nu, lam, message)
+    k_rear = curve.curvatures(np.array([0.0]))[0][0]
+    k_front = curve.curvatures(np.array([1.0]))[0][0]
+    parachute = bool(k_rear < 0.0 or np.min(prof["x"]) < prof["x"][0] - 1e-12)
+    history = [(lv[2]["panels"]["modes"], lv[2]["residual"], lv[2]["V_over_U"],
+                lv[2]["dp_plus_R0"], lv[2]["tension_max"]) for lv in levels]
+    return VesicleResult(
+        nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=success, message=message,
+        V_over_U=fine["V_over_U"], dp_plus_R0=fine["dp_plus_R0"], dp_plus_R=fine["dp_plus_R"],
+        ell=fine["ell"], film_min=fine["film_min"], tension_max=fine["tension_max"],
+        tension_rear=float(prof["tension"][0]), tension_front=float(prof["tension"][-1]),
+        curvature_rear=-float(k_rear), curvature_front=-float(k_front),
+        shape_class="parachute" if parachute else "bullet", error_estimate=err,
+        volume_error=fine["volume_error"], area_error=fine["area_error"],
+        residual=fine["residual"], tol=tol, residual_tol=residual_tol, panels=fine["panels"],
+        refinement=history, seed=seed_source, iterations=iterations, timings=timings,
+        modes=curve.modes.copy(), density=np.asarray(curve.density).copy(),
+        tension_modes=np.asarray(st["g"]).copy(), **prof)
+
+
+def _profile(curve: SpectralCurve, g, n: int = 201) -> dict:
+    """Shape and tension at ``n`` points equally spaced in arc length, poles included."""
+    tt = np.linspace(0.0, 1.0, 4001)
+    s_dense = curve.arc_length(tt)
+    s = np.linspace(0.0, curve.length, n)
+    tau = np.interp(s, s_dense, tt)
+    for _ in range(3):
+        tau = np.clip(tau - (curve.arc_length(tau) - s) / (curve.length * curve.g(tau)), 0, 1)
+    x, r = curve.position(tau)
+    r[0] = r[-1] = 0.0
+    gam, dgam = tension_profile(curve, g, tau)
+    return {"s": s, "x": x - x[0], "r": r, "psi": curve.tangent_angle(tau), "tension": gam,
+            "shear_membrane": -dgam}

@@ -1,0 +1,159 @@
+"""Steady vesicle in a tube (BEM): limits, conservation, convergence, lubrication, bad input.
+
+Units: R = 1, U the mean velocity, lam = R0/R, Ca_B = eta U R0^2/kappa (50 unless stated),
+tension in eta U. Measured numbers in the comments come from this solver (16-point panels).
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from bem.results import VESICLE_PROFILE_COLUMNS, VesicleResult
+from bem.vesicle import solve_vesicle
+from correlations.cli import main
+from lubrication.checks import CannotPassError, InvalidParameterError
+from lubrication.geometry import critical_confinement
+
+# (0.9, 1.0), Ca_B = 50: levels 16/24/32 modes (measured)
+#   residual 5.0e-3, 3.3e-4, 2.3e-5   (/~14 per +8 modes, spectral)
+#   V/U      1.2573307, 1.2574625, 1.2574636
+#   dp+R0/(eta U) 13.716093, 13.716093, 13.716092
+REF_09_10 = {"V_over_U": 1.2574636, "dp_plus_R0": 13.716092}
+
+
+# ------------------------------------------------------------------ bad input
+@pytest.mark.parametrize("kwargs, exc", [
+    ({"nu": 1.0, "lam": 0.5}, InvalidParameterError),
+    ({"nu": 0.0, "lam": 0.5}, InvalidParameterError),
+    ({"nu": math.nan, "lam": 0.5}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.4}, CannotPassError),                     # lam_c(0.9) = 1.3239
+    ({"nu": 0.9, "lam_ratio": 1.0}, CannotPassError),
+    ({"nu": 0.9}, InvalidParameterError),                           # neither lam nor ratio
+    ({"nu": 0.9, "lam": 1.0, "lam_ratio": 0.5}, InvalidParameterError),
+    ({"nu": 0.9, "lam": -1.0}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "ca_b": 0.0}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "ca_b": math.inf}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "n_modes": 3}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "initial": "sphere"}, InvalidParameterError),
+])
+def test_bad_input_is_rejected_before_any_work(kwargs, exc):
+    with pytest.raises(exc):
+        solve_vesicle(**kwargs)
+
+
+def test_cli_bad_input_exits_2(capsys):
+    try:
+        code = main(["bem", "vesicle", "--nu", "0.9", "--lam", "1.4", "--json"])
+    except SystemExit as e:
+        code = e.code
+    _, err = capsys.readouterr()
+    assert code == 2 and "lam_c" in err and len(err.strip().splitlines()) == 1
+
+
+# ------------------------------------------------------------------ a cheap solve (fast)
+@pytest.fixture(scope="module")
+def coarse():
+    """(0.9, 1.0) with the pair 11/16 modes (~15 s; the pair differs by 1.5 % in dp+)."""
+    return solve_vesicle(0.9, 1.0, n_modes=16, tol=5e-2, residual_tol=1e-2)
+
+
+def test_coarse_solution_conserves_volume_and_area_and_is_near_the_reference(coarse):
+    res = coarse
+    assert res.success, res.message
+    assert res.volume_error <= 1e-8 and res.area_error <= 1e-8
+    assert res.residual < 1e-2
+    assert res.V_over_U == pytest.approx(REF_09_10["V_over_U"], rel=2e-3)
+    assert res.dp_plus_R0 == pytest.approx(REF_09_10["dp_plus_R0"], rel=2e-3)
+    assert res.shape_class == "bullet" and res.curvature_front < 0
+    assert 0 < res.film_min < 1 - 1.0 / critical_confinement(0.9) + 0.5
+    # the membrane is at rest in its frame, so the tension rises toward the front on average
+    assert res.tension_front > res.tension_rear
+    # the shear stress is -dgamma/ds: its integral over s is the tension drop
+    drop = -np.trapezoid(res.shear_membrane, res.s)
+    assert drop == pytest.approx(res.tension_front - res.tension_rear, rel=1e-3)
+
+
+def test_result_dict_and_atomic_save(coarse, tmp_path):
+    d = coarse.to_dict()
+    for key in ("nu", "lam", "lam_c", "V_over_U", "dp_plus_R0", "ell", "film_min",
+                "tension_max", "shape_class", "converged", "volume_error", "area_error"):
+        assert key in d, key
+    json.dumps(d, allow_nan=False)
+    jp, cp = coarse.save(tmp_path)
+    saved = json.loads(jp.read_text())
+    assert saved["V_over_U"] == coarse.V_over_U
+    assert cp.read_text().startswith(",".join(n for n, _ in VESICLE_PROFILE_COLUMNS))
+    assert not list(tmp_path.glob(".*tmp"))                    # no temporary file left
+    assert isinstance(coarse, VesicleResult)
+    assert abs(coarse.curve().volume() / (4 / 3 * math.pi) - 1) < 1e-12
+
+
+def test_warm_start_from_a_result_converges_at_once(coarse):
+    res = solve_vesicle(0.9, 1.0, n_modes=16, tol=5e-2, residual_tol=1e-2, initial=coarse)
+    assert res.success and res.seed == "initial"
+    assert res.V_over_U == pytest.approx(coarse.V_over_U, rel=1e-6)
+
+
+# ------------------------------------------------------------------ validation (slow)
+@pytest.mark.slow
+def test_small_vesicle_moves_like_a_sphere():
+    """nu = 0.98, lam = 0.3: V/U near 2 - (4/3) lam^2 (1 %), dp+R0 near 16 lam^6 (few %).
+    Measured: V/U = 1.881379 (+0.07 %), dp+R0/(eta U) = 0.0117214 (+0.5 %), residual 6e-8."""
+    lam = 0.3
+    res = solve_vesicle(0.98, lam)
+    assert res.success, res.message
+    assert res.V_over_U == pytest.approx(2 - 4 / 3 * lam**2, rel=0.01)
+    assert res.dp_plus_R0 == pytest.approx(16 * lam**6, rel=0.03)
+    assert res.volume_error <= 1e-8 and res.area_error <= 1e-8
+
+
+@pytest.mark.slow
+@pytest.mark.ci
+def test_residual_falls_spectrally_with_the_modes_at_nu09_lam1():
+    """Residual floor of the least squares against the number of modes N (16, 24, 32): it
+    must fall geometrically (measured: /15 and /14 per +8 modes); V/U and dp+ converge."""
+    res = solve_vesicle(0.9, 1.0, tol=1e-12, max_modes=32)
+    n, resid, V, dp, _gmax = (np.array(c) for c in zip(*res.refinement))
+    assert list(n) == [16, 24, 32]
+    factor = resid[:-1] / resid[1:]
+    assert np.all(factor > 8), f"{resid=}, {factor=}"
+    assert resid[-1] < 1e-4
+    assert res.volume_error <= 1e-8 and res.area_error <= 1e-8
+    assert abs(V[-1] - V[-2]) < 1e-5 and abs(dp[-1] - dp[-2]) < 1e-4 * dp[-1]
+    assert V[-1] == pytest.approx(REF_09_10["V_over_U"], abs=2e-6)
+    assert dp[-1] == pytest.approx(REF_09_10["dp_plus_R0"], rel=1e-6)
+
+
+def test_cli_reports_an_unconverged_run_with_exit_1(capsys, tmp_path):
+    """8 modes cannot reach the default residual tolerance 1e-4 at (0.9, 1.0): exit 1, the
+    JSON is still printed with "converged": false and the contract's keys, files are saved."""
+    try:
+        code = main(["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--modes", "8", "--json",
+                     "--out", str(tmp_path)])
+    except SystemExit as e:
+        code = e.code
+    out, _ = capsys.readouterr()
+    obj = json.loads(out)
+    assert code == 1 and obj["converged"] is False and "residual" in obj["message"]
+    for key in ("nu", "lam", "lam_c", "V_over_U", "dp_plus_R0", "ell", "film_min",
+                "tension_max", "shape_class", "converged", "volume_error", "area_error"):
+        assert key in obj, key
+    assert len(list(tmp_path.glob("*.json"))) == 1 and len(list(tmp_path.glob("*.csv"))) == 1
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(reason="near lam_c the residual floor stays ~5e-2 up to 24 modes (uniform or "
+                          "curvature-equidistributed arc length): the film transition regions "
+                          "are not resolved yet", strict=False)
+def test_near_critical_vesicle_agrees_with_lubrication():
+    """nu = 0.9, lam/lam_c = 0.97, Ca_B = 50 against solve_lubrication at the same Ca_B.
+    Measured (NOT converged, residual 5e-2 at 24 modes): V/U 1.0449 (lubrication 1.0289),
+    dp+R0/(eta U) 227.1 (234.9), gamma_max 400 (588)."""
+    from lubrication.solve import solve_lubrication
+    lub = solve_lubrication(0.9, lam_ratio=0.97, ca_b=50.0)
+    res = solve_vesicle(0.9, lam_ratio=0.97, max_modes=40, density_terms=16)
+    assert res.success, res.message
+    assert res.V_over_U == pytest.approx(lub.V_over_U, rel=0.01)
+    assert res.dp_plus_R0 == pytest.approx(lub.dp_plus_R0, rel=0.05)
