@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lubrication.io import atomic_write
+from lubrication.io import atomic_write, save_result
 
 __all__ = ["DROP_PROFILE_COLUMNS", "VESICLE_PROFILE_COLUMNS", "DropResult", "SphereResult",
            "VesicleResult", "provenance"]
@@ -117,10 +117,6 @@ DROP_PROFILE_COLUMNS = (
     ("kappa1", "meridional curvature, positive for a sphere [1/R]"),
     ("kappa2", "azimuthal curvature, positive for a sphere [1/R]"),
 )
-
-
-def _atomic_write_text(path: Path, text: str) -> None:
-    atomic_write(path, lambda fh: fh.write(text))
 
 
 def _clean(v):
@@ -253,19 +249,9 @@ class DropResult:
         Each file goes to a temporary file in ``directory`` and is renamed, so an interrupted
         run never leaves a half-written file. Default stem ``bem_drop_lam<lam>_ca<ca>``.
         """
-        directory = Path(directory)
-        directory.mkdir(parents=True, exist_ok=True)
         stem = stem or f"bem_drop_lam{self.lam:.6g}_ca{self.ca:.6g}"
-        json_path, csv_path = directory / f"{stem}.json", directory / f"{stem}.csv"
-        data = self.to_dict()
-        data["profile_columns"] = dict(DROP_PROFILE_COLUMNS)
-        _atomic_write_text(json_path, json.dumps(data, indent=2, sort_keys=True,
-                                                 allow_nan=False))
-        lines = [",".join(name for name, _ in DROP_PROFILE_COLUMNS)]
-        cols = [np.asarray(getattr(self, name)) for name, _ in DROP_PROFILE_COLUMNS]
-        lines += [",".join(repr(float(v)) for v in row) for row in zip(*cols)]
-        _atomic_write_text(csv_path, "\n".join(lines) + "\n")
-        return json_path, csv_path
+        return save_result(directory, stem, self.to_dict(), DROP_PROFILE_COLUMNS,
+                           lambda name: np.asarray(getattr(self, name)))
 
 
 # Columns of the CSV written by VesicleResult.save, with their units.
@@ -396,16 +382,6 @@ class VesicleResult:
     def save(self, directory, stem: str | None = None) -> tuple[Path, Path]:
         """Write ``<stem>.json`` and ``<stem>.csv`` (profiles) atomically into ``directory``.
         Default stem ``bem_vesicle_nu<nu>_lam<lam>_cab<ca_b>``."""
-        directory = Path(directory)
-        directory.mkdir(parents=True, exist_ok=True)
         stem = stem or f"bem_vesicle_nu{self.nu:.6g}_lam{self.lam:.6g}_cab{self.ca_b:.6g}"
-        json_path, csv_path = directory / f"{stem}.json", directory / f"{stem}.csv"
-        data = self.to_dict()
-        data["profile_columns"] = dict(VESICLE_PROFILE_COLUMNS)
-        _atomic_write_text(json_path, json.dumps(data, indent=2, sort_keys=True,
-                                                 allow_nan=False))
-        lines = [",".join(name for name, _ in VESICLE_PROFILE_COLUMNS)]
-        cols = [np.asarray(getattr(self, name)) for name, _ in VESICLE_PROFILE_COLUMNS]
-        lines += [",".join(repr(float(v)) for v in row) for row in zip(*cols)]
-        _atomic_write_text(csv_path, "\n".join(lines) + "\n")
-        return json_path, csv_path
+        return save_result(directory, stem, self.to_dict(), VESICLE_PROFILE_COLUMNS,
+                           lambda name: np.asarray(getattr(self, name)))

@@ -6,11 +6,13 @@ A result file is written to a temporary file in the target directory and renamed
 
 from __future__ import annotations
 
+import csv
+import json
 import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write"]
+__all__ = ["atomic_write", "save_result"]
 
 
 def atomic_write(path, write, *, binary: bool = False) -> Path:
@@ -43,3 +45,26 @@ def atomic_write(path, write, *, binary: bool = False) -> Path:
             os.unlink(tmp)
         raise
     return path
+
+
+def save_result(directory, stem: str, data: dict, columns, profiles) -> tuple[Path, Path]:
+    """Write ``<stem>.json`` (``data`` plus the column legend) and ``<stem>.csv`` (profiles).
+
+    ``columns`` is a sequence of ``(name, description with unit)``; ``profiles(name)`` returns
+    the array of that column. Both files are written atomically (:func:`atomic_write`); floats
+    in the CSV are written with ``repr`` (round-trip exact). Returns the two paths.
+    """
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    json_path, csv_path = directory / f"{stem}.json", directory / f"{stem}.csv"
+    data = dict(data, profile_columns=dict(columns))
+    atomic_write(json_path, lambda f: json.dump(data, f, indent=2, sort_keys=True, allow_nan=False))
+
+    def write_csv(f):
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow([name for name, _ in columns])
+        for row in zip(*(profiles(name) for name, _ in columns)):
+            w.writerow([repr(float(v)) for v in row])
+
+    atomic_write(csv_path, write_csv)
+    return json_path, csv_path

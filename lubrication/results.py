@@ -11,8 +11,6 @@ only the inputs, ``message`` and the diagnostics are meaningful then.
 
 from __future__ import annotations
 
-import csv
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .io import atomic_write
+from .io import save_result
 
 __all__ = ["LubricationResult", "PROFILE_COLUMNS"]
 
@@ -158,23 +156,9 @@ class LubricationResult:
         interrupted run never leaves a half-written file. The default stem encodes the inputs,
         e.g. ``lubrication_nu0.9_lam1.2000_high-Ca``. Returns the two paths.
         """
-        directory = Path(directory)
-        directory.mkdir(parents=True, exist_ok=True)
         if stem is None:
             stem = f"lubrication_nu{self.nu:.4g}_lam{self.lam:.6g}_{self.model}"
             if self.model == "bending":
                 stem += f"_caB{self.ca_b:.4g}"
-        json_path, csv_path = directory / f"{stem}.json", directory / f"{stem}.csv"
-        data = self.to_dict()
-        data["profile_columns"] = dict(PROFILE_COLUMNS)
-        atomic_write(json_path, lambda f: json.dump(data, f, indent=2, allow_nan=False))
-
-        def write_csv(f):
-            w = csv.writer(f)
-            w.writerow([name for name, _ in PROFILE_COLUMNS])
-            cols = [np.asarray(getattr(self, name)) for name, _ in PROFILE_COLUMNS]
-            for row in zip(*cols):
-                w.writerow([repr(float(v)) for v in row])
-
-        atomic_write(csv_path, write_csv)
-        return json_path, csv_path
+        return save_result(directory, stem, self.to_dict(), PROFILE_COLUMNS,
+                           lambda name: np.asarray(getattr(self, name)))
