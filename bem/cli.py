@@ -48,6 +48,18 @@ def cmd_bem_sphere(args):
                                   f"a/R = {res.lam:g}")
 
 
+def _method_and_error(res):
+    """Method label (modes and panels) and ``pm(key)`` -> "± error" of a drop/vesicle result."""
+    p, err = res.panels, res.error_estimate
+    method = (f"BEM, {p.get('modes', '?')} modes, {p.get('drop', '?')}+{p.get('wall', '?')} "
+              f"panels" if p else "BEM")
+
+    def pm(key):
+        v = err.get(key)
+        return f"± {v:.1e}" if v is not None and math.isfinite(v) else ""
+    return method, pm
+
+
 def cmd_bem_drop(args):
     """Steady clean drop (viscosity ratio 1, constant tension) on the axis."""
     from correlations.cli import format_rows
@@ -60,14 +72,7 @@ def cmd_bem_drop(args):
     if args.out:
         paths = res.save(args.out)
         out["files"] = [str(p) for p in paths]
-    err = res.error_estimate
-    p = res.panels
-    method = (f"BEM, {p.get('modes', '?')} modes, {p.get('drop', '?')}+{p.get('wall', '?')} "
-              f"panels" if p else "BEM")
-
-    def pm(key):
-        v = err.get(key)
-        return f"± {v:.1e}" if v is not None and math.isfinite(v) else ""
+    method, pm = _method_and_error(res)
 
     rows = [("confinement lam = R0/R", res.lam, "-", "input", ""),
             ("capillary number Ca = eta U/gamma", res.ca, "-", "input", ""),
@@ -104,14 +109,7 @@ def cmd_bem_vesicle(args):
     if args.out:
         paths = res.save(args.out)
         out["files"] = [str(p) for p in paths]
-    err = res.error_estimate
-    p = res.panels
-    method = (f"BEM, {p.get('modes', '?')} modes, {p.get('drop', '?')}+{p.get('wall', '?')} "
-              f"panels" if p else "BEM")
-
-    def pm(key):
-        v = err.get(key)
-        return f"± {v:.1e}" if v is not None and math.isfinite(v) else ""
+    method, pm = _method_and_error(res)
 
     rows = [("reduced volume nu", res.nu, "-", "input", ""),
             ("confinement lam = R0/R", res.lam, "-", "input", f"lam/lam_c = {res.lam_ratio:.4g}"),
