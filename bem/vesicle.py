@@ -33,6 +33,21 @@ Method:
 * the wall, inlet and panel breaks are those of :class:`bem.drop.DropOperator`, fixed during one
   solve so that the residual is a smooth function of the modes.
 
+Near the critical confinement (thin film, gap h ≪ R) the velocity is set by the gap to a small
+*relative* error along the film and its entrance/exit transitions (length ~ sqrt(hR)), where the
+curvature is small: uniform arc length or a curvature-equidistributing density leave a residual
+floor ~5e-2 at 16–24 modes (λ/λc = 0.97). ``density="film"`` builds the arc-length density from
+the lubrication weight (h + h_min)^(-1/2) (:func:`bem.shape.film_density`); the panel breaks
+(graded by sqrt(gap) in τ) then also cluster there. The quadrature is not the limit (V/U of a
+fixed shape changes by 1e-7 from 8 to 24 membrane panels at λ/λc = 0.97). A cold start from
+the lubrication shape at λ/λc = 0.97 drifts to a spurious, nearly closed film (min gap 1.5e-3);
+continuation in λ/λc (0.9, 0.94, 0.97 with ``initial=`` the previous result) avoids it.
+Measured at ν = 0.9, Ca_B = 50 with ``density_terms=16, density="film"``: residual
+1.8e-2, 2.3e-3, 2.0e-4 at 16/24/32 modes for λ/λc = 0.9 (uniform: 4.5e-2 at 16); 2.9e-2,
+1.8e-2, 9.1e-3, 3.2e-3, 8.1e-4 at 16/24/32/40/48 modes for λ/λc = 0.97 (continuation; V/U
+1.02881, Δp⁺R0/(ηU) 245.9 at 48 modes vs lubrication 1.02895, 234.9), see
+``test_near_critical_matches_lubrication``.
+
 Initial shapes: the lubrication solution at the same (ν, λ, Ca_B)
 (:func:`lubrication.solve.solve_lubrication`) mapped to the spectral curve with
 :func:`bem.shape.fit_curve`; if it fails, a prolate spheroid of the right ν.
@@ -56,7 +71,7 @@ from .assembly import poiseuille
 from .drop import DropDiscretisation, DropOperator, _panels_for
 from .membrane import bending_force, tension_basis, tension_profile
 from .quadrature import DEFAULT_ORDER, influence
-from .shape import SpectralCurve, equidistributing_density, fit_curve, spheroid_curve
+from .shape import SpectralCurve, equidistributing_density, film_density, fit_curve, spheroid_curve
 
 __all__ = ["VesicleOperator", "fit_lubrication", "lubrication_seed", "solve_vesicle", "spheroid_seed"]
 
@@ -320,7 +335,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                   ca_b: float = 50.0, initial=None, n_modes: int | None = None,
                   tol: float = 1e-4, residual_tol: float = 1e-4, max_modes: int = 40,
                   order: int = DEFAULT_ORDER, xtol: float = 1e-10, max_nfev: int = 60,
-                  density_terms: int = 0):
+                  density_terms: int = 0, density: str = "curvature"):
     r"""Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the tube axis.
 
     Parameters
@@ -346,6 +361,10 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         Cosine terms of an arc-length density built from the seed's curvature
         (:func:`bem.shape.equidistributing_density`), which concentrates modes and panels at
         the sharp bends of the film transition near lam_c; 0 (default) keeps uniform arc length.
+    density : {"curvature", "film"}
+        Weight of that density: the curvature (above), or the lubrication weight
+        (h + h_min)^(-1/2) of the gap h = 1 - r (:func:`bem.shape.film_density`), which
+        clusters modes and panels along the thin film and its entrance/exit near lam_c.
 
     Returns
     -------
@@ -364,6 +383,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
 
     t_start = time.perf_counter()
     nu, lam, lam_c, ca_b = _check_inputs(nu, lam, lam_ratio, ca_b)
+    if density not in ("curvature", "film"):
+        raise InvalidParameterError("density", density, '"curvature" or "film"')
     tol = float(check_range("tol", tol, 1e-12, 0.5))
     residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 10.0))
     max_modes = int(check_range("max_modes", max_modes, 8, 256))
@@ -392,8 +413,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                                     "a VesicleResult, SpectralCurve, LubricationResult or None")
     density_terms = int(check_range("density_terms", density_terms, 0, 64))
     if density_terms:
-        seed = fit_curve(seed.sample, 0.0, 1.0, sequence[0],
-                         density=equidistributing_density(seed, density_terms))
+        build = film_density if density == "film" else equidistributing_density
+        seed = fit_curve(seed.sample, 0.0, 1.0, sequence[0], density=build(seed, density_terms))
     levels, timings, iterations = [], {}, {}
     message = ""
     prev = seed

@@ -136,3 +136,34 @@ def test_bad_curves_are_rejected():
         SpectralCurve([0.0], -1.0)
     with pytest.raises(InvalidParameterError, match="density"):
         SpectralCurve([0.0], 1.0, 0.0, [1.5])          # g = 1 + 1.5 cos(pi tau) < 0
+
+
+def test_film_density_clusters_the_parameter_in_the_thin_gap():
+    """A capsule of radius 0.97 in a unit tube: the film density gives the film (gap 0.03) a
+    larger share of the parameter than uniform arc length, and g stays positive with mean 1."""
+    from bem.shape import film_density
+
+    a, half = 0.97, 1.5                                 # hemispherical caps, cylinder |x| < half
+
+    def capsule(t):                                     # t in [0, 1], arc length / S
+        S = math.pi * a + 2 * half
+        s = np.asarray(t, dtype=float) * S
+        s1, s2 = 0.5 * math.pi * a, 0.5 * math.pi * a + 2 * half
+        phi1, phi2 = s / a, (s - s2) / a + 0.5 * math.pi
+        x = np.where(s < s1, -half - a * np.cos(phi1),
+                     np.where(s < s2, -half + (s - s1), half + a * np.sin(phi2 - 0.5 * math.pi)))
+        r = np.where(s < s1, a * np.sin(phi1), np.where(s < s2, a, a * np.cos(phi2 - 0.5 * math.pi)))
+        psi = np.where(s < s1, 0.5 * math.pi - phi1, np.where(s < s2, 0.0, -(phi2 - 0.5 * math.pi)))
+        return x, r, S * np.cos(psi), S * np.sin(psi)
+
+    curve = fit_curve(capsule, 0.0, 1.0, 32)
+    a_coef = film_density(curve, 16)
+    shaped = SpectralCurve(curve.modes, curve.length, curve.x0, a_coef)
+    t = np.linspace(0.0, 1.0, 2001)
+    assert np.min(shaped.g(t)) > 0 and float(np.mean(shaped.g(t))) == pytest.approx(1, abs=0.02)
+    # share of the parameter spent where the arc length is in the film (|x| < half)
+    S, s_film = curve.length, (0.5 * math.pi * a, 0.5 * math.pi * a + 2 * half)
+    s = shaped.arc_length(t)
+    share = np.mean((s > s_film[0]) & (s < s_film[1]))
+    assert share > 1.2 * (s_film[1] - s_film[0]) / S
+    assert film_density(curve, 0).size == 0
