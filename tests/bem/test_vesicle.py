@@ -91,6 +91,7 @@ def test_result_dict_and_atomic_save(coarse, tmp_path):
     assert abs(coarse.curve().volume() / (4 / 3 * math.pi) - 1) < 1e-12
 
 
+@pytest.mark.slow          # ~17 s
 def test_warm_start_from_a_result_converges_at_once(coarse):
     res = solve_vesicle(0.9, 1.0, n_modes=16, tol=5e-2, residual_tol=1e-2, initial=coarse)
     assert res.success and res.seed == "initial"
@@ -110,8 +111,7 @@ def test_small_vesicle_moves_like_a_sphere():
     assert res.volume_error <= 1e-8 and res.area_error <= 1e-8
 
 
-@pytest.mark.slow
-@pytest.mark.ci
+@pytest.mark.slow          # ~30 s; in make validation (CI's ci subset covers lubrication and drop)
 def test_residual_falls_spectrally_with_the_modes_at_nu09_lam1():
     """Residual floor of the least squares against the number of modes N (16, 24, 32): it
     must fall geometrically (measured: /15 and /14 per +8 modes); V/U and dp+ converge."""
