@@ -65,7 +65,7 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import least_squares
 
 from lubrication.checks import InvalidParameterError, check_positive, check_range
-from lubrication.geometry import check_passes, critical_confinement
+from lubrication.geometry import resolve_confinement
 
 from .assembly import poiseuille
 from .drop import DropDiscretisation, DropOperator, _panels_for
@@ -316,15 +316,8 @@ _KEYS = ("V_over_U", "dp_plus_R0", "tension_max")
 
 
 def _check_inputs(nu, lam, lam_ratio, ca_b):
-    nu = float(check_range("nu", nu, 0.0, 1.0, lo_open=True, hi_open=True,
-                           reason="a vesicle with excess area (nu < 1) is needed"))
-    if (lam is None) == (lam_ratio is None):
-        raise InvalidParameterError("lam", lam, "give exactly one of lam and lam_ratio")
-    lam_c = float(critical_confinement(nu))
-    if lam is None:
-        lam = float(check_positive("lam_ratio", lam_ratio, reason="lam_ratio = lam/lam_c")) * lam_c
-    lam = float(check_positive("lam", lam))
-    check_passes(nu, lam)
+    nu, lam, lam_c = resolve_confinement(
+        nu, lam, lam_ratio, nu_reason="a vesicle with excess area (nu < 1) is needed")
     ca_b = float(check_positive("ca_b", ca_b, reason="Ca_B = eta U R0^2/kappa"))
     if not math.isfinite(ca_b):
         raise InvalidParameterError("ca_b", ca_b, "a finite positive number")

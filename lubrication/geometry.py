@@ -32,6 +32,7 @@ __all__ = [
     "reduced_volume",
     "reduced_area_excess",
     "check_passes",
+    "resolve_confinement",
     "cell_from_volume_area",
     "confinement_from_diameter",
     "critical_diameter_um",
@@ -151,6 +152,23 @@ def check_passes(nu, lam):
             "lam", lam_b.ravel()[i], f"0 < lam < lam_c={lam_c_b.ravel()[i]:.6g}",
             "lam >= lam_c(nu): the vesicle cannot pass this tube intact")
     return scalar_or_array(lam_c)
+
+
+def resolve_confinement(nu, lam=None, lam_ratio=None, *, nu_reason: str = ""):
+    """Checked scalar ``(nu, lam, lam_c)`` from ``lam`` or ``lam_ratio = lam/lam_c`` (exactly one).
+
+    For the solvers: 0 < nu < 1 (``nu_reason`` says why a sphere is excluded) and
+    0 < lam < lam_c(nu) (:class:`CannotPassError` otherwise).
+    """
+    nu = float(check_range("nu", nu, 0.0, 1.0, lo_open=True, hi_open=True, reason=nu_reason))
+    if (lam is None) == (lam_ratio is None):
+        raise InvalidParameterError("lam", lam, "give exactly one of lam and lam_ratio")
+    lam_c = float(critical_confinement(nu))
+    if lam is None:
+        lam = float(check_positive("lam_ratio", lam_ratio, reason="lam_ratio = lam/lam_c")) * lam_c
+    lam = float(check_positive("lam", lam))
+    check_passes(nu, lam)
+    return nu, lam, lam_c
 
 
 def clearance(nu, lam):

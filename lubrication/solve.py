@@ -54,7 +54,7 @@ from scipy.integrate import cumulative_trapezoid, solve_bvp
 from .checks import InvalidParameterError, check_positive, check_range
 from .equations import (BENDING_STATE, HIGH_CA_STATE, _gap_flow, capillary_number, rhs_bending,
                         rhs_high_ca, spherical_cap)
-from .geometry import check_passes, critical_confinement, critical_length
+from .geometry import critical_length, resolve_confinement
 from .results import LubricationResult
 
 __all__ = ["solve_lubrication", "sweep_lubrication", "CAP_RADIUS", "CONSTRAINT_TOL", "FORCE_TOL"]
@@ -103,15 +103,8 @@ class _Problem:
 
 
 def _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes) -> _Problem:
-    nu = float(check_range("nu", nu, 0.0, 1.0, lo_open=True, hi_open=True,
-                           reason="the lubrication model needs a deflated vesicle (nu < 1)"))
-    if (lam is None) == (lam_ratio is None):
-        raise InvalidParameterError("lam", lam, "give exactly one of lam and lam_ratio")
-    lam_c = float(critical_confinement(nu))
-    if lam is None:
-        lam = float(check_positive("lam_ratio", lam_ratio, reason="lam_ratio = lam/lam_c")) * lam_c
-    lam = float(check_positive("lam", lam))
-    check_passes(nu, lam)
+    nu, lam, lam_c = resolve_confinement(
+        nu, lam, lam_ratio, nu_reason="the lubrication model needs a deflated vesicle (nu < 1)")
     if isinstance(ca_b, (int, float, np.floating)) and ca_b == math.inf:
         ca_b = math.inf
     else:
