@@ -39,13 +39,27 @@ def cmd_bem_sphere(args):
             ("quiescent-tube drag K = F/(6 pi eta a V)", res.drag_K, "-", method,
              f"± {res.drag_K_err:.1e}"),
             ("converged", res.converged, "", "", "" if res.converged else res.message)]
+    _plot_shape(res, args)
+    return out, format_rows(rows, f"Rigid sphere on the axis of Poiseuille flow (BEM), "
+                                  f"a/R = {res.lam:g}")
+
+
+def _shape_result_json(res, subcommand: str, args) -> dict:
+    """JSON object of a drop/vesicle result; with --out the files are written and listed."""
+    out = {"command": "bem", "subcommand": subcommand, **res.to_dict(shape=False),
+           "converged": bool(res.success)}
+    if args.out:
+        out["files"] = [str(p) for p in res.save(args.out)]
+    return out
+
+
+def _plot_shape(res, args) -> None:
+    """--plot FILE: the body's shape in the tube."""
     if args.plot:
         from correlations.cli import _save_plot
 
         from .plotting import plot_shape
         _save_plot(plot_shape(res), args.plot)
-    return out, format_rows(rows, f"Rigid sphere on the axis of Poiseuille flow (BEM), "
-                                  f"a/R = {res.lam:g}")
 
 
 def _method_and_error(res):
@@ -66,12 +80,7 @@ def cmd_bem_drop(args):
 
     from .drop import solve_drop
     res = solve_drop(args.lam, args.ca, n_modes=args.modes, tol=args.tol)
-    out = {"command": "bem", "subcommand": "drop"}
-    out.update(res.to_dict(shape=False))
-    out["converged"] = bool(res.success)
-    if args.out:
-        paths = res.save(args.out)
-        out["files"] = [str(p) for p in paths]
+    out = _shape_result_json(res, "drop", args)
     method, pm = _method_and_error(res)
 
     rows = [("confinement lam = R0/R", res.lam, "-", "input", ""),
@@ -87,11 +96,7 @@ def cmd_bem_drop(args):
             ("volume error", res.volume_error, "-", "panel quadrature", ""),
             ("time", res.timings.get("total_s"), "s", "", ""),
             ("converged", res.success, "", "", "" if res.success else res.message)]
-    if args.plot:
-        from correlations.cli import _save_plot
-
-        from .plotting import plot_shape
-        _save_plot(plot_shape(res), args.plot)
+    _plot_shape(res, args)
     return out, format_rows(rows, f"Clean drop, viscosity ratio 1, on the axis of Poiseuille "
                                   f"flow (BEM): lam = {res.lam:g}, Ca = {res.ca:g}")
 
@@ -103,12 +108,7 @@ def cmd_bem_vesicle(args):
     from .vesicle import solve_vesicle
     res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
                         n_modes=args.modes, tol=args.tol)
-    out = {"command": "bem", "subcommand": "vesicle"}
-    out.update(res.to_dict(shape=False))
-    out["converged"] = bool(res.success)
-    if args.out:
-        paths = res.save(args.out)
-        out["files"] = [str(p) for p in paths]
+    out = _shape_result_json(res, "vesicle", args)
     method, pm = _method_and_error(res)
 
     rows = [("reduced volume nu", res.nu, "-", "input", ""),
@@ -128,11 +128,7 @@ def cmd_bem_vesicle(args):
              "panel quadrature", ""),
             ("time", res.timings.get("total_s"), "s", "", ""),
             ("converged", res.success, "", "", "" if res.success else res.message)]
-    if args.plot:
-        from correlations.cli import _save_plot
-
-        from .plotting import plot_shape
-        _save_plot(plot_shape(res), args.plot)
+    _plot_shape(res, args)
     return out, format_rows(rows, f"Vesicle, viscosity ratio 1, on the axis of Poiseuille flow "
                                   f"(BEM): nu = {res.nu:g}, lam = {res.lam:g}, "
                                   f"Ca_B = {res.ca_b:g}")
