@@ -154,8 +154,13 @@ class VesicleOperator(DropOperator):
         m[keep] = z
         return m
 
-    def evaluate(self, curve: SpectralCurve) -> dict:
-        """Flow of the membrane ``curve``: the least-squares tension and V, the residual."""
+    def velocity_columns(self, curve: SpectralCurve):
+        r"""Membrane velocity as an affine function of the tension coefficients (one BEM solve).
+
+        Returns (panels, u0, U, dp0, dp) with the velocity at the nodes (interleaved x, r;
+        lab frame) :math:`u = u_0 + U g` for tension :math:`\gamma = \sum_k g_k\cos(k\pi\tau)`,
+        and Δp⁺R/(ηU) :math:`= dp_0 + dp\cdot g` (reciprocal theorem, as for the drop).
+        """
         tol = self.disc.quad_tol
         drop = self.panels(curve)
         if np.max(drop.r) >= 1.0 - 1e-6:
@@ -182,17 +187,24 @@ class VesicleOperator(DropOperator):
         Uc = AQ[: 2 * nd] + (B @ qw) / _EIGHT_PI + np.outer(col_dp, dp)
         u0 = Uc[:, 0].copy()
         u0[0::2] += poiseuille(rb)
+        return drop, u0, Uc[:, 1:], float(dp[0]), dp[1:]
+
+    def evaluate(self, curve: SpectralCurve) -> dict:
+        """Flow of the membrane ``curve``: the least-squares tension and V, the residual."""
+        drop, u0, Ug, dp0, dpg = self.velocity_columns(curve)
+        nd = drop.r.size
+        wb = drop.w.ravel()
         sw = np.repeat(np.sqrt(wb), 2)
         ex = np.zeros(2 * nd)
         ex[0::2] = 1.0
-        M = np.column_stack([Uc[:, 1:], -ex]) * sw[:, None]
+        M = np.column_stack([Ug, -ex]) * sw[:, None]
         sol, *_ = np.linalg.lstsq(M, -u0 * sw, rcond=1e-13)
         F = u0 * sw + M @ sol
         g, V = sol[:-1], float(sol[-1])
         res = F / sw
         self.evaluations += 1
         return {"curve": curve, "panels": drop, "F": F, "g": g, "V": V,
-                "dp": float(dp[0] + dp[1:] @ g), "residual": float(np.max(np.abs(res))),
+                "dp": float(dp0 + dpg @ g), "residual": float(np.max(np.abs(res))),
                 "res_x": res[0::2], "res_r": res[1::2]}
 
 
