@@ -28,8 +28,9 @@ Method:
   shape they are the linear least-squares solution (variable projection, Golub & Pereyra 1973),
   so the nonlinear unknowns are the N - 2 free shape modes.
 * the weighted residual :math:`\sqrt{w_i}(u_i - V e_x)` (both components) is minimised by
-  Levenberg–Marquardt with a forward-difference Jacobian (:func:`scipy.optimize.least_squares`);
-  its floor falls spectrally with N, and the refinement pair gives the error estimate.
+  Levenberg–Marquardt with a forward-difference Jacobian and Broyden updates
+  (:func:`bem.newton.levenberg_marquardt`, shared with the drop); its floor falls spectrally
+  with N, and the refinement pair gives the error estimate.
 * the wall, inlet and panel breaks are those of :class:`bem.drop.DropOperator`, fixed during one
   solve so that the residual is a smooth function of the modes.
 
@@ -62,13 +63,13 @@ import time
 import numpy as np
 import scipy.linalg as sla
 from scipy.interpolate import CubicSpline
-from scipy.optimize import least_squares
 
 from lubrication.checks import InvalidParameterError, check_positive, check_range
 from lubrication.geometry import resolve_confinement
 
 from .assembly import poiseuille
 from .drop import DropDiscretisation, DropOperator, _panels_for
+from .newton import levenberg_marquardt
 from .membrane import bending_force, tension_basis, tension_profile
 from .quadrature import DEFAULT_ORDER, influence
 from .shape import SpectralCurve, equidistributing_density, film_density, fit_curve, spheroid_curve
@@ -254,33 +255,28 @@ def spheroid_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
 
 
 # ---------------------------------------------------------------------------- one level
-def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, max_nfev):
-    """Levenberg–Marquardt at one resolution from ``seed``; returns (state, op, info)."""
+def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, max_iter,
+                 seed_level=False):
+    """Levenberg–Marquardt (:func:`bem.newton.levenberg_marquardt`) at one resolution from
+    ``seed``; returns (state, op, info)."""
     ref = fit_curve(seed.sample, 0.0, 1.0, disc.n_modes, density=seed.density) \
         if seed.n_modes != disc.n_modes else seed
     op = VesicleOperator(nu, lam, ca_b, disc, ref, n_tension)
     template = op.curve(ref.modes).modes.copy()
-    z0 = op.free(template)
-    penalty = [None]
 
     def fun(z):
-        try:
-            st = op.evaluate(op.curve(op.full(z, template)))
-        except InvalidParameterError:
-            if penalty[0] is None:
-                raise
-            return penalty[0]
-        return st["F"]
+        st = op.evaluate(op.curve(op.full(z, template)))
+        return st["F"], st
 
-    F0 = fun(z0)
-    penalty[0] = np.full_like(F0, 10.0 * max(1.0, float(np.max(np.abs(F0)))))
-    ev0 = op.evaluations
-    sol = least_squares(fun, z0, method="lm", x_scale="jac", xtol=xtol, ftol=1e-14,
-                        gtol=1e-15, max_nfev=max_nfev)
-    state = op.evaluate(op.curve(op.full(sol.x, template)))
-    info = {"status": int(sol.status), "message": sol.message, "nfev": int(sol.nfev),
-            "evaluations": op.evaluations - ev0 + 1, "norm0": float(np.linalg.norm(F0)),
-            "norm": float(np.linalg.norm(state["F"])), "area_mode": op.area_mode}
+    rep = levenberg_marquardt(fun, op.free(template), tol=xtol, max_iter=max_iter,
+                              max_jacobians=2 if seed_level else 8,
+                              stall=0.9 if seed_level else None)
+    if rep.payload is None:
+        raise InvalidParameterError("initial", "a shape rejected by the operator", rep.message)
+    state = rep.payload
+    info = {"success": rep.success, "message": rep.message, "iterations": rep.iterations,
+            "evaluations": rep.evaluations, "jacobians": rep.jacobians,
+            "norm0": rep.history[0], "norm": rep.history[-1], "area_mode": op.area_mode}
     return state, op, info
 
 
@@ -339,7 +335,7 @@ def _check_inputs(nu, lam, lam_ratio, ca_b):
 def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | None = None,
                   ca_b: float = 50.0, initial=None, n_modes: int | None = None,
                   tol: float = 1e-4, residual_tol: float = 1e-4, max_modes: int = 40,
-                  order: int = DEFAULT_ORDER, xtol: float = 1e-10, max_nfev: int = 60,
+                  order: int = DEFAULT_ORDER, xtol: float = 1e-9, max_iter: int = 40,
                   density_terms: int = 0, density: str = "curvature"):
     r"""Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the tube axis.
 
@@ -360,8 +356,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         V/U, Δp⁺ and γ_max) with the pointwise residual max|u − V e_x| below ``residual_tol``.
     order : int
         Gauss nodes per panel.
-    xtol, max_nfev : float, int
-        Step tolerance and evaluation budget of each Levenberg–Marquardt level.
+    xtol, max_iter : float, int
+        Relative step tolerance and iteration budget of each Levenberg–Marquardt level
+        (:func:`bem.newton.levenberg_marquardt`; it also stops at the residual floor).
     density_terms : int
         Cosine terms of an arc-length density built from the seed's curvature
         (:func:`bem.shape.equidistributing_density`), which concentrates modes and panels at
@@ -428,7 +425,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         t0 = time.perf_counter()
         try:
             st, op, info = _solve_level(nu, lam, ca_b, disc, prev, n, xtol=xtol,
-                                        max_nfev=max_nfev * n)
+                                        max_iter=max_iter, seed_level=not levels)
         except InvalidParameterError as exc:
             message = f"level with {n} modes: {exc}"
             break
@@ -439,7 +436,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         log.info("solve_vesicle nu=%g lam=%g modes=%d: V/U=%.10f dp+R0=%.8g gmax=%.6g "
                  "residual %.2e (%s)", nu, lam, n, out["V_over_U"], out["dp_plus_R0"],
                  out["tension_max"], out["residual"], info["message"])
-        if info["status"] <= 0:
+        if not info["success"]:
             message = f"Levenberg–Marquardt failed with {n} modes: {info['message']}"
             break
         prev = st["curve"]
