@@ -59,6 +59,7 @@ from lubrication.checks import InvalidParameterError, check_positive, check_rang
 
 from .assembly import poiseuille
 from .geometry import graded_breaks, wall_half_length
+from .newton import levenberg_marquardt
 from .quadrature import (
     DEFAULT_ORDER,
     DEFAULT_TOL,
@@ -262,44 +263,15 @@ class NewtonReport:
     jacobians: int = 0
 
 
-def _fd_jacobian(op: DropOperator, modes: np.ndarray, V: float, state: DropState,
-                 F: np.ndarray, fd_step: float) -> np.ndarray:
-    """Forward-difference Jacobian of F = sqrt(w)(u.n - V n_x) in (c_2..c_N, V).
-
-    The weights are held at the base state so that the columns are derivatives of u.n - V n_x
-    only; the V column is exact.
-    """
-    sw = np.sqrt(state.weights)
-    nfree = modes.size - 1
-    J = np.empty((F.size, nfree + 1))
-    for j in range(nfree):
-        h = fd_step * max(1.0, abs(modes[j + 1]))
-        m2 = modes.copy()
-        m2[j + 1] += h
-        try:
-            st2 = op.state(op.curve(m2))
-        except InvalidParameterError:          # the perturbed drop touches the wall
-            m2[j + 1] -= 2.0 * h
-            st2 = op.state(op.curve(m2))
-            h = -h
-        J[:, j] = (sw * st2.residual(V) - F) / h
-    J[:, nfree] = -sw * state.panels.nx.ravel()
-    return J
-
-
 def newton_drop(op: DropOperator, modes0, V0: float | None = None, *, tol: float = 1e-9,
                 max_iter: int = 40, fd_step: float = 1e-7,
                 max_jacobians: int = 8) -> NewtonReport:
     r"""Steady drop shape by Levenberg–Marquardt on the weighted residual.
 
     Unknowns: modes c_2..c_N (c_1 closes the curve) and V. Residual
-    :math:`F_i = \sqrt{w_i}\,(u\cdot n - V n_x)_i` at the drop nodes. Jacobian: forward
-    differences (step ``fd_step`` times max(1, |c_k|), one BEM evaluation per mode; exact in V),
-    then Broyden rank-one updates after each accepted step; a fresh difference Jacobian is
-    computed when a Broyden step is rejected or reduces |F| by less than half (at most
-    ``max_jacobians`` in all). Stops when the largest relative change of the unknowns falls
-    below ``tol``, or when |F| stalls at its floor (the truncation error of the shape modes)
-    with a fresh Jacobian.
+    :math:`F_i = \sqrt{w_i}\,(u\cdot n - V n_x)_i` at the drop nodes, minimised by
+    :func:`bem.newton.levenberg_marquardt` (difference Jacobian, one BEM evaluation per mode,
+    then Broyden updates; the V column is exact).
     """
     modes = np.array(modes0, dtype=float)
     ev0 = op.evaluations
@@ -309,84 +281,24 @@ def newton_drop(op: DropOperator, modes0, V0: float | None = None, *, tol: float
         return NewtonReport(False, f"initial shape rejected: {exc}", None, math.nan, modes, 0,
                             op.evaluations - ev0, [])
     modes = state.curve.modes.copy()
-    V = state.V_fit if V0 is None else float(V0)
-    F = np.sqrt(state.weights) * state.residual(V)
-    norm = float(np.linalg.norm(F))
-    history = [norm]
-    nfree = modes.size - 1
-    J = _fd_jacobian(op, modes, V, state, F, fd_step)
-    n_jac, fresh = 1, True
-    mu = 1e-8
-    success, message, step, it = False, "", math.inf, 0
-    for it in range(1, max_iter + 1):
-        JTJ = J.T @ J
-        g = J.T @ F
-        D = np.diag(np.diag(JTJ))
-        accepted = False
-        for _ in range(10):
-            delta = -np.linalg.solve(JTJ + mu * D, g)
-            m_new = modes.copy()
-            m_new[1:] += delta[:nfree]
-            V_new = V + delta[nfree]
-            try:
-                st_new = op.state(op.curve(m_new))
-            except InvalidParameterError:
-                mu = max(10.0 * mu, 1e-4)
-                continue
-            F_new = np.sqrt(st_new.weights) * st_new.residual(V_new)
-            norm_new = float(np.linalg.norm(F_new))
-            if norm_new < norm * (1.0 + 1e-12):
-                accepted = True
-                break
-            if not fresh:
-                break
-            mu = max(10.0 * mu, 1e-4)
-        if not accepted:
-            if not fresh and n_jac < max_jacobians:
-                J = _fd_jacobian(op, modes, V, state, F, fd_step)
-                n_jac, fresh = n_jac + 1, True
-                continue
-            # at the floor the Gauss–Newton model itself promises no decrease: converged
-            d_gn, *_ = np.linalg.lstsq(J, -F, rcond=None)
-            promised = 1.0 - float(np.linalg.norm(F + J @ d_gn) / norm) ** 2 if norm > 0 else 0.0
-            if promised < 1e-3:
-                success = True
-                message = (f"converged to the residual floor: the Gauss–Newton model promises "
-                           f"a {promised:.1e} relative decrease of |F|^2")
-                break
-            message = (f"Levenberg–Marquardt step rejected with a fresh Jacobian and damping "
-                       f"{mu:.1e} (residual norm {norm:.2e})")
-            break
-        step = float(np.max(np.abs(delta[:nfree])) / max(1.0, np.max(np.abs(modes))))
-        step = max(step, abs(delta[nfree]) / max(1.0, abs(V)))
-        ratio = norm_new / norm if norm > 0 else 0.0
-        # Broyden update of the mode columns (Dennis & Schnabel 1983, §8.1); V column exact
-        m_acc = st_new.curve.modes
-        s = np.concatenate([m_acc[1:] - modes[1:], [V_new - V]])
-        y = F_new - F
-        J = J + np.outer(y - J @ s, s) / (s @ s)
-        J[:, nfree] = -np.sqrt(st_new.weights) * st_new.panels.nx.ravel()
-        was_fresh, fresh = fresh, False
-        modes, V, state, F, norm = m_acc.copy(), V_new, st_new, F_new, norm_new
-        mu = max(mu / 10.0, 1e-12)
-        history.append(norm)
-        log.debug("newton_drop it %d: |F| = %.3e (ratio %.2f), step %.2e, max|un - V nx| = "
-                  "%.2e, jacobians %d", it, norm, ratio, step, state.max_residual(V), n_jac)
-        if step < tol:
-            success = True
-            message = f"converged: relative step {step:.1e} < {tol:.0e}"
-            break
-        if was_fresh and ratio > 0.9 and step < 1e3 * tol:
-            success = True
-            message = f"converged to the residual floor: relative step {step:.1e}"
-            break
-        if ratio > 0.5 and n_jac < max_jacobians:
-            J = _fd_jacobian(op, modes, V, state, F, fd_step)
-            n_jac, fresh = n_jac + 1, True
-    else:
-        message = f"no convergence in {max_iter} iterations (last relative step {step:.1e})"
-    return NewtonReport(success, message, state, V, modes, it, op.evaluations - ev0, history,
-                        n_jac)
+    V0 = state.V_fit if V0 is None else float(V0)
+
+    def fun(z):
+        m = modes.copy()
+        m[1:] = z[:-1]
+        st = op.state(op.curve(m))
+        return np.sqrt(st.weights) * st.residual(z[-1]), st
+
+    def v_column(st):
+        return {modes.size - 1: -np.sqrt(st.weights) * st.panels.nx.ravel()}
+
+    rep = levenberg_marquardt(fun, np.concatenate([modes[1:], [V0]]), tol=tol,
+                              max_iter=max_iter, fd_step=fd_step, max_jacobians=max_jacobians,
+                              exact_columns=v_column)
+    st = rep.payload
+    return NewtonReport(rep.success, rep.message, st, float(rep.z[-1]),
+                        st.curve.modes.copy() if st is not None else modes, rep.iterations,
+                        op.evaluations - ev0, rep.history, rep.jacobians)
 
 
 # -------------------------------------------------------------------------------- relaxation

@@ -69,10 +69,16 @@ from lubrication.geometry import resolve_confinement
 
 from .assembly import poiseuille
 from .drop import DropDiscretisation, DropOperator, _panels_for
-from .newton import levenberg_marquardt
 from .membrane import bending_force, tension_basis, tension_profile
+from .newton import levenberg_marquardt
 from .quadrature import DEFAULT_ORDER, influence
-from .shape import SpectralCurve, equidistributing_density, film_density, fit_curve, spheroid_curve
+from .shape import (
+    SpectralCurve,
+    equidistributing_density,
+    film_density,
+    fit_curve,
+    spheroid_curve,
+)
 
 __all__ = ["VesicleOperator", "fit_lubrication", "lubrication_seed", "solve_vesicle", "spheroid_seed"]
 
