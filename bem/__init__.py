@@ -6,6 +6,7 @@ matrix), :mod:`bem.quadrature` (panels, singular and near-singular rules), :mod:
 curvatures), :mod:`bem.assembly` (bordered single-layer system), :mod:`bem.solve` (rigid
 sphere), :mod:`bem.drop` (clean drop: direct Newton steady state, time relaxation),
 :mod:`bem.membrane` (bending and tension forces), :mod:`bem.vesicle` (steady vesicle),
+:mod:`bem.sweep` (vesicle sweeps over the confinement by continuation),
 :mod:`bem.results` (result dataclasses), :mod:`bem.plotting`, :mod:`bem.cli`. Units:
 R = eta = U = 1.
 
@@ -14,7 +15,7 @@ Public entry points: :func:`bem.solve.solve_sphere`, :func:`bem.solve.sphere_dra
 """
 
 __all__ = ["DropResult", "SphereResult", "VesicleResult", "solve_drop", "solve_sphere",
-           "solve_vesicle", "sphere_drag"]
+           "solve_vesicle", "sphere_drag", "sweep_vesicle"]
 
 
 def __getattr__(name):          # lazy: importing bem does not load numba
@@ -24,6 +25,9 @@ def __getattr__(name):          # lazy: importing bem does not load numba
     if name == "solve_drop":
         from .drop import solve_drop
         return solve_drop
+    if name == "sweep_vesicle":
+        from .sweep import sweep_vesicle
+        return sweep_vesicle
     if name == "solve_vesicle":
         from .vesicle import solve_vesicle
         return solve_vesicle

@@ -15,8 +15,10 @@ from __future__ import annotations
 
 import logging
 import math
+import sys
 
-__all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere", "cmd_bem_vesicle"]
+__all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere", "cmd_bem_vesicle",
+           "cmd_bem_vesicle_sweep"]
 
 
 def cmd_bem_sphere(args):
@@ -134,8 +136,65 @@ def cmd_bem_vesicle(args):
                                   f"Ca_B = {res.ca_b:g}")
 
 
+def _sweep_values(args):
+    """The confinements of ``--lam A B N`` or ``--lam-ratio A B N`` (N points, A to B)."""
+    import numpy as np
+
+    from correlations.cli import UsageError
+    option, (a, b, n) = (("--lam", args.lam) if args.lam is not None
+                         else ("--lam-ratio", args.lam_ratio))
+    if not (math.isfinite(n) and n.is_integer() and n >= 2):
+        raise UsageError(f"{option} {a:g} {b:g} {n:g}: N, the number of points, must be an "
+                         "integer >= 2")
+    return {"lams" if option == "--lam" else "lam_ratios": np.linspace(a, b, int(n))}
+
+
+def cmd_bem_vesicle_sweep(args):
+    """Steady vesicles over a range of confinements at fixed nu (continuation in lam)."""
+    from correlations.cli import format_rows
+
+    from .sweep import save_sweep, sweep_table, sweep_vesicle
+    points = _sweep_values(args)
+    solver = {"n_modes": args.modes, "tol": args.tol, "residual_tol": args.residual_tol}
+    done = []
+
+    def report(i, n, res, seconds):
+        """One line per point on stderr (not with --json); with --out the points so far."""
+        done.append(res)
+        if not args.json:
+            print(f"point {i}/{n}: lam = {res.lam:.6g} (lam/lam_c = {res.lam_ratio:.4f}) "
+                  f"{'converged' if res.success else 'NOT CONVERGED'} in {seconds:.1f} s",
+                  file=sys.stderr, flush=True)
+        if args.out and i < n:          # an interrupted sweep keeps its finished points
+            save_sweep(args.out, sorted(done, key=lambda r: r.lam), solver, profiles=False,
+                       complete=False)
+
+    results = sweep_vesicle(args.nu, **points, ca_b=args.ca_b, progress=report, **solver)
+    table = sweep_table(results)
+    r0 = results[0]
+    out = {"command": "bem", "subcommand": "vesicle-sweep", "nu": r0.nu, "lam_c": r0.lam_c,
+           "ca_b": r0.ca_b, "parameters": solver, "converged": all(r.success for r in results),
+           "n_points": len(results), "n_converged": sum(bool(r.success) for r in results),
+           "points": table}
+    if args.out:
+        out["files"] = [str(p) for p in save_sweep(args.out, results, solver)]
+    if args.plot:
+        from correlations.cli import _save_plot
+
+        from .plotting import plot_vesicle_sweep
+        _save_plot(plot_vesicle_sweep(results), args.plot)
+    rows = [(f"lam = {t['lam']:.5g} (lam/lam_c = {t['lam_ratio']:.4f})", t["V_over_U"], "V/U",
+             f"dp+R0/(eta U) = {t['dp_plus_R0']:.4g}, h/R = {t['film_min']:.3g}, "
+             f"L/R = {t['ell']:.3g}, {t['shape_class']}, {t['runtime']:.0f} s"
+             if t["converged"] else f"{t['runtime']:.0f} s",
+             "" if t["converged"] else "NOT CONVERGED") for t in table]
+    title = (f"Vesicle sweep (BEM), nu = {r0.nu:g}, Ca_B = {r0.ca_b:g}: "
+             f"{out['n_converged']}/{len(results)} points converged")
+    return out, format_rows(rows, title)
+
+
 def add_bem_parser(subparsers) -> None:
-    """Add ``bem sphere`` and ``bem drop`` to the ``vesicle-tube`` subcommands."""
+    """Add ``bem sphere``, ``drop``, ``vesicle`` and ``vesicle-sweep`` to the subcommands."""
     from correlations.cli import _Parser
     logging.getLogger("bem").addHandler(logging.NullHandler())
     b = subparsers.add_parser("bem", help="boundary element solvers: rigid sphere, clean drop, vesicle")
@@ -184,3 +243,28 @@ def add_bem_parser(subparsers) -> None:
     v.add_argument("--plot", metavar="FILE", help="write the vesicle shape to FILE (PNG)")
     v.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     v.set_defaults(func=cmd_bem_vesicle)
+
+    w = sub.add_parser("vesicle-sweep", help="steady vesicles over a range of confinements "
+                                             "(continuation in lam, minutes per point)")
+    w.add_argument("--nu", type=float, required=True, help="reduced volume, 0 < nu < 1 [-]")
+    g = w.add_mutually_exclusive_group(required=True)
+    g.add_argument("--lam", type=float, nargs=3, metavar=("A", "B", "N"),
+                   help="N confinements R0/R from A to B, each 0 < lam < lam_c(nu) [-]")
+    g.add_argument("--lam-ratio", type=float, nargs=3, metavar=("A", "B", "N"), dest="lam_ratio",
+                   help="N values of lam/lam_c from A to B, each 0 < ratio < 1 [-]")
+    w.add_argument("--ca-b", type=float, default=50.0, dest="ca_b",
+                   help="bending capillary number eta U R0^2/kappa (default 50) [-]")
+    w.add_argument("--n-modes", "--modes", type=int, dest="modes",
+                   help="shape modes of the fine mesh (default: automatic refinement)")
+    w.add_argument("--tol", type=float, default=1e-4,
+                   help="relative tolerance of the refinement pair in V/U, dp+ and "
+                        "gamma_max (default 1e-4) [-]")
+    w.add_argument("--residual-tol", type=float, default=1e-4, dest="residual_tol",
+                   help="tolerance of the steady residual max|u - V e_x| (default 1e-4) [U]")
+    w.add_argument("--out", metavar="DIR", help="write the sweep CSV + JSON and each point's "
+                                                "JSON + CSV profiles to DIR (atomic)")
+    w.add_argument("--plot", metavar="FILE", help="write the shapes of all points in the tube "
+                                                  "to FILE (PNG)")
+    w.add_argument("--json", action="store_true", help="print one JSON object on stdout "
+                                                       "(and no progress lines)")
+    w.set_defaults(func=cmd_bem_vesicle_sweep)

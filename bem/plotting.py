@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-__all__ = ["plot_shape"]
+__all__ = ["plot_shape", "plot_vesicle_sweep"]
 
 
 def plot_shape(result, ax=None):
@@ -57,5 +57,67 @@ def plot_shape(result, ax=None):
         title += f": V/U = {result.V_over_U:.5g}, Δp⁺R/(ηU) = {result.dp_plus_R:.5g}"
     if not result.converged:
         title += " (NOT CONVERGED)"
+    ax.set_title(title, fontsize="small")
+    return ax
+
+
+def plot_vesicle_sweep(results, ax=None):
+    """Meridional sections of the vesicles of a sweep, overlaid in one tube, coloured by λ.
+
+    Each shape is centred at the middle of its length (x_rear + x_front)/2 and mirrored about
+    the axis; the wall r = ±R is drawn. Points that did not converge are dashed; points without
+    a shape (the solver produced none) are left out and counted in the title.
+
+    Parameters
+    ----------
+    results : sequence of VesicleResult
+        The points of :func:`bem.sweep.sweep_vesicle` (one ν and Ca_B).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new headless figure (no pyplot) is made if None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    import matplotlib as mpl
+
+    if ax is None:
+        from matplotlib.figure import Figure  # lazy: importing bem needs no matplotlib
+        ax = Figure(figsize=(7.5, 3.2)).add_subplot()
+    results = list(results)
+    lams = np.array([r.lam for r in results], dtype=float)
+    lo, hi = (float(lams.min()), float(lams.max())) if lams.size else (0.0, 1.0)
+    norm = mpl.colors.Normalize(lo, hi if hi > lo else lo + 1e-9)
+    cmap = mpl.colormaps["viridis"]
+    half, drawn = 1.5, 0
+    for res in sorted(results, key=lambda r: r.lam):
+        x = np.asarray(res.x, dtype=float)
+        r = np.asarray(res.r, dtype=float)
+        if x.size == 0:
+            continue
+        x = x - 0.5 * (x.min() + x.max())
+        half = max(half, 0.6 * float(np.ptp(x)) + 0.3)
+        style = {"color": cmap(norm(res.lam)), "lw": 1.4, "ls": "-" if res.success else "--"}
+        ax.plot(x, r, **style)
+        ax.plot(x, -r, **style)
+        drawn += 1
+    for y in (1.0, -1.0):
+        ax.plot([-half, half], [y, y], "k-", lw=2)
+    ax.axhline(0.0, color="0.6", lw=0.6, ls="-.")
+    ax.annotate("", xy=(-0.6 * half, 0.0), xytext=(-0.95 * half, 0.0),
+                arrowprops={"arrowstyle": "->", "color": "0.4"})
+    ax.set_xlim(-half, half)
+    ax.set_ylim(-1.15, 1.15)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x/R [-]")
+    ax.set_ylabel("r/R [-]")
+    ax.figure.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax,
+                       label="λ = R0/R [-]", shrink=0.8)
+    title = ""
+    if results:
+        r0 = results[0]
+        n_bad = sum(not r.success for r in results)
+        title = (f"ν = {r0.nu:.4g}, Ca_B = {r0.ca_b:.4g}: {drawn} of {len(results)} shapes"
+                 + (f", {n_bad} NOT CONVERGED (dashed)" if n_bad else ""))
     ax.set_title(title, fontsize="small")
     return ax

@@ -286,6 +286,19 @@ def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, m
     return state, op, info
 
 
+#: lam/lam_c from which :func:`solve_vesicle` uses the film density and continuation by default
+NEAR_CRITICAL = 0.9
+
+
+def _rungs(ratio: float) -> list[float]:
+    """Continuation rungs below ``ratio``: 1 - lam/lam_c = 0.1, 0.05, 0.025, ..."""
+    out, gap = [], 1.0 - NEAR_CRITICAL
+    while 1.0 - gap < ratio - 1e-9:
+        out.append(round(1.0 - gap, 12))
+        gap *= 0.5
+    return out
+
+
 # ---------------------------------------------------------------------------- outputs
 def _cross(u, v):
     """z-component of the cross product of 2-vectors (last axis)."""
@@ -342,7 +355,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                   ca_b: float = 50.0, initial=None, n_modes: int | None = None,
                   tol: float = 1e-4, residual_tol: float = 1e-4, max_modes: int = 40,
                   order: int = DEFAULT_ORDER, xtol: float = 1e-9, max_iter: int = 40,
-                  density_terms: int = 0, density: str = "curvature"):
+                  density: str = "auto", density_terms: int = 16,
+                  continuation: bool | None = None, rung_modes: int = 24):
     r"""Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the tube axis.
 
     Parameters
@@ -365,14 +379,22 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     xtol, max_iter : float, int
         Relative step tolerance and iteration budget of each Levenberg–Marquardt level
         (:func:`bem.newton.levenberg_marquardt`; it also stops at the residual floor).
+    density : {"auto", "uniform", "curvature", "film"}
+        Arc-length density of the shape parametrisation (and hence of modes and panels):
+        uniform; built from the seed's curvature (:func:`bem.shape.equidistributing_density`,
+        concentrates on sharp bends); or from the lubrication weight (h + h_min)^(-1/2) of the
+        gap h = 1 - r (:func:`bem.shape.film_density`, concentrates on the thin film and its
+        entrance/exit). "auto" (default): "film" for lam/lam_c >= NEAR_CRITICAL (0.9),
+        "uniform" below.
     density_terms : int
-        Cosine terms of an arc-length density built from the seed's curvature
-        (:func:`bem.shape.equidistributing_density`), which concentrates modes and panels at
-        the sharp bends of the film transition near lam_c; 0 (default) keeps uniform arc length.
-    density : {"curvature", "film"}
-        Weight of that density: the curvature (above), or the lubrication weight
-        (h + h_min)^(-1/2) of the gap h = 1 - r (:func:`bem.shape.film_density`), which
-        clusters modes and panels along the thin film and its entrance/exit near lam_c.
+        Cosine terms of that density (ignored for "uniform").
+    continuation : bool, optional
+        Reach lam/lam_c > NEAR_CRITICAL through rungs 1 - lam/lam_c = 0.1, 0.05, 0.025, ...
+        (each a ``rung_modes`` solve started from the previous one, the first from
+        lubrication); a cold start from the lubrication shape there can drift to a spurious,
+        closing film. Default: on when ``initial`` is None and lam/lam_c > NEAR_CRITICAL.
+    rung_modes : int
+        Shape modes of each continuation rung.
 
     Returns
     -------
@@ -391,8 +413,14 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
 
     t_start = time.perf_counter()
     nu, lam, lam_c, ca_b = _check_inputs(nu, lam, lam_ratio, ca_b)
-    if density not in ("curvature", "film"):
-        raise InvalidParameterError("density", density, '"curvature" or "film"')
+    if density not in ("auto", "uniform", "curvature", "film"):
+        raise InvalidParameterError("density", density,
+                                    '"auto", "uniform", "curvature" or "film"')
+    ratio = lam / lam_c
+    if density == "auto":
+        density = "film" if ratio >= NEAR_CRITICAL else "uniform"
+    if continuation is None:
+        continuation = initial is None and ratio > NEAR_CRITICAL
     tol = float(check_range("tol", tol, 1e-12, 0.5))
     residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 10.0))
     max_modes = int(check_range("max_modes", max_modes, 8, 256))
@@ -402,6 +430,25 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     else:
         sequence = list(range(16, max_modes + 1, 8))
     seed_source = "initial"
+    density_terms = int(check_range("density_terms", density_terms, 1, 64))
+    if continuation:
+        rung_kw = {"ca_b": ca_b, "n_modes": int(check_range("rung_modes", rung_modes, 8, 256)),
+                   "tol": 0.5, "residual_tol": 10.0, "order": order, "density": density,
+                   "density_terms": density_terms, "continuation": False}
+        rung = None
+        for q in _rungs(ratio):
+            rung = solve_vesicle(nu, lam_ratio=q, initial=rung, **rung_kw)
+            if rung.modes.size == 0 or "film closes" in rung.message \
+                    or "self-intersects" in rung.message:
+                return VesicleResult(
+                    nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=False, tol=tol,
+                    residual_tol=residual_tol, timings={"total_s": time.perf_counter() - t_start},
+                    message=f"continuation failed at lam/lam_c = {q:g}: {rung.message}")
+            log.info("solve_vesicle continuation rung lam/lam_c=%g: V/U=%.6f dp+R0=%.5g "
+                     "residual %.1e", q, rung.V_over_U, rung.dp_plus_R0, rung.residual)
+        if rung is not None:
+            initial = rung
+            seed_source = f"continuation (lam/lam_c = {', '.join(f'{r:g}' for r in _rungs(ratio))})"
     if isinstance(initial, SpectralCurve):
         seed = initial
     elif isinstance(initial, LubricationResult) or initial is None:
@@ -415,12 +462,14 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             seed = spheroid_seed(nu, lam, sequence[0])
             seed_source = "spheroid"
     elif isinstance(initial, VesicleResult):
+        if initial.modes.size == 0:
+            raise InvalidParameterError("initial", "a VesicleResult without a shape",
+                                        "a result with a shape")
         seed = initial.curve()
     else:
         raise InvalidParameterError("initial", type(initial).__name__,
                                     "a VesicleResult, SpectralCurve, LubricationResult or None")
-    density_terms = int(check_range("density_terms", density_terms, 0, 64))
-    if density_terms:
+    if density != "uniform":
         build = film_density if density == "film" else equidistributing_density
         seed = fit_curve(seed.sample, 0.0, 1.0, sequence[0], density=build(seed, density_terms))
     levels, timings, iterations = [], {}, {}

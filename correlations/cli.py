@@ -276,6 +276,7 @@ def _save_plot(ax, path: str) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     from .estimate import RBC_DEFAULTS
+    from .registry import SOLVERS
     p = _Parser(prog="vesicle-tube", description="Vesicles and red blood cells in narrow tubes "
                 "(Stokes flow): geometry, engineering estimates, apparent viscosity.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -311,9 +312,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="whether --hematocrit is the tube (H_T) or discharge (H_D) value (default tube)")
     e.add_argument("--extrapolate", action="store_true",
                    help="fill quantities no method covers with flagged extrapolations")
-    e.add_argument("--solver", action="append", default=[], choices=("lubrication",),
-                   help="let the method table use this numerical solver where it is valid "
-                        "(preferred over closed forms; seconds per point)")
+    e.add_argument("--solver", action="append", default=[], choices=SOLVERS,
+                   help="let the method table use this numerical solver where it is valid, "
+                        "ahead of the closed forms (repeatable; lubrication: seconds, bem: the "
+                        "BEM vesicle, most accurate, minutes per case)")
     e.add_argument("--plot", metavar="FILE", help="write V/U and dp+ vs lam with this case marked (PNG)")
     common(e)
     e.set_defaults(func=cmd_estimate)

@@ -31,7 +31,7 @@ from lubrication.geometry import (cell_from_volume_area, check_passes, check_red
                                   critical_diameter_um,
                                   critical_length, critical_length_um)
 
-from .registry import METHODS, QUANTITIES, SOLVERS, SolverNotConverged
+from .registry import METHODS, QUANTITIES, SOLVER_COST, SOLVERS, SolverNotConverged
 
 __all__ = ["RBC_DEFAULTS", "RUPTURE_TENSION_MN_M", "Quantity", "Estimate", "estimate",
            "estimate_dimensionless"]
@@ -108,8 +108,8 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
     """Evaluate ``quantity`` with the first valid method of the table (see module docstring).
 
     Rows of an enabled solver come first; rows of other solvers are skipped, but when one would
-    have been valid that is recorded in ``log["available"]``. Solver failures go to
-    ``log["failures"]`` and the next row is tried.
+    have been valid that is recorded in ``log["available"]`` (and per quantity in
+    ``log["covers"]``). Solver failures go to ``log["failures"]`` and the next row is tried.
     """
     log = {} if log is None else log
     reasons, fallback = [], None
@@ -119,6 +119,7 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
         if (m.quantity == quantity and m.solver is not None and m.solver not in solvers
                 and m.validity.contains(**known)):
             log.setdefault("available", set()).add(m.solver)
+            log.setdefault("covers", {}).setdefault(quantity, set()).add(m.solver)
     for m in rows:
         missing = [r for r in m.requires if r not in known]
         if missing:
@@ -248,9 +249,12 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
     extrapolate : bool
         Fill quantities that no method covers with the least-extrapolated method, flagged.
     solvers : tuple of str
-        Numerical solvers the method table may use, e.g. ``("lubrication",)``; they take
-        precedence over the closed forms where valid. A solver that fails to converge is
-        reported in ``notes`` and makes ``converged`` False.
+        Numerical solvers the method table may use, ``"lubrication"`` (seconds) and/or
+        ``"bem"`` (the BEM vesicle: most accurate, minutes); they take precedence over the
+        closed forms where valid, the BEM ahead of the lubrication solver. A solver that fails
+        to converge is reported in ``notes`` and makes ``converged`` False. A solver that is not
+        enabled is never run, not even where no other method is valid: ``notes`` then says
+        which solver covers the case and how to enable it.
 
     Raises
     ------
@@ -287,12 +291,18 @@ def _notes(quantities: dict, ca_b, log: dict) -> tuple:
         notes.append(f"The {solver} solver was enabled but did not converge: {message}")
     available = sorted(log.get("available", ()))
     if available:
-        notes.append("The " + " and ".join(available) + " solver covers this case: enable it with "
-                     + " ".join(f"--solver {a}" for a in available) + " (seconds per point).")
+        plural = len(available) > 1
+        notes.append("The " + " and ".join(available) + (" solvers cover" if plural else
+                     " solver covers") + " this case: enable " + ("them" if plural else "it")
+                     + " with " + " and/or ".join(f"--solver {a}" for a in available) + " ("
+                     + ", ".join(f"{a}: {SOLVER_COST[a]}" for a in available) + ").")
     missing = [k for k in QUANTITIES if quantities[k].value is None
                and quantities[k].note.startswith("no valid")]
     if missing:
-        notes.append(f"No closed-form method is valid for {', '.join(missing)} here; use "
+        covering = sorted(set().union(*(log.get("covers", {}).get(k, ()) for k in missing)))
+        hint = ("; " + " or ".join(f"--solver {a}" for a in covering) + " would compute "
+                "them (not run unless enabled)" if covering else "")
+        notes.append(f"No closed-form method is valid for {', '.join(missing)} here{hint}; use "
                      "extrapolate=True (--extrapolate) for flagged extrapolations.")
     if ca_b is not None and ca_b < 10:
         notes.append(f"Ca_B = {ca_b:.3g} < 10: bending matters; Chen et al. 2020 correlations were "

@@ -6,8 +6,8 @@ estimate takes the first one whose validity range contains the case (and whose i
 themselves valid). Where no method is valid the quantity is reported as unavailable, with the
 reason; it is extrapolated (and flagged ``valid=False``) only when the caller asks for it.
 
-Later solvers (the lubrication BVP, issue 4; the BEM, issues 5-6) extend the table by adding
-:class:`Method` rows for the range where they are valid.
+Numerical solvers (the lubrication BVP, issue 4; the BEM vesicle, issue 6) extend the table with
+opt-in :class:`Method` rows for the range where they are valid (below).
 
 State passed to the methods (dimensionless unless named): ``nu``, ``lam``, ``lam_c``, ``delta``
 (= 1 - lam/lam_c), ``ell_c``, ``ca_b`` (= eta U R0^2/kappa, absent when unknown), the quantities
@@ -33,13 +33,22 @@ eta_rel               single_file_chen2020           d <= 8 um, dp_plus_R0 and H
 ====================  =============================  ==============================================
 
 Opt-in solver rows (used first when the caller enables the solver, e.g. ``--solver
-lubrication``; otherwise the estimate only notes that the solver covers the case):
+lubrication``; otherwise the estimate only notes that the solver covers the case). With both
+enabled the BEM rows come first (most accurate, slowest), then the lubrication rows:
 
 ====================  =============================  ==============================================
+V/U, film (minimum     bem_vesicle                    0.6 <= nu <= 0.98, delta >= 0.02, i.e.
+gap), ell, dp+, shape,                                lam/lam_c <= 0.98 (BEM_RANGE); Ca_B from the
+front tension                                         case, 50 if unknown; minutes per point
 V/U, film (minimum     lubrication_solver             0.6 <= nu <= 0.98, delta <= 0.3
 gap), ell, dp+, shape,                                (LUBRICATION_RANGE); Ca_B from the case, 50 if
 front tension                                         unknown; seconds per point
 ====================  =============================  ==============================================
+
+The BEM is never run unless the caller enables it, not even where no other method is valid:
+there the estimate only says that the BEM covers the case (a solve takes minutes). One solve per
+(nu, lam, Ca_B) serves all BEM rows of an estimate (:func:`_bem_result` is cached, failures
+included, so a solve that did not converge is not repeated for every row).
 """
 
 from __future__ import annotations
@@ -53,10 +62,14 @@ from lubrication.checks import ValidityRange
 
 from . import film, pressure, shape, viscosity
 
-__all__ = ["Method", "METHODS", "QUANTITIES", "SOLVERS", "SolverNotConverged"]
+__all__ = ["BEM_RANGE", "Method", "METHODS", "QUANTITIES", "SOLVERS", "SOLVER_COST",
+           "SolverNotConverged"]
 
 #: Opt-in numerical solvers that rows of the table may name.
-SOLVERS = ("lubrication",)
+SOLVERS = ("lubrication", "bem")
+
+#: Typical cost of one estimate with each solver (quoted in the estimate's notes).
+SOLVER_COST = {"lubrication": "seconds per case", "bem": "minutes per case"}
 
 
 @dataclass(frozen=True)
@@ -78,8 +91,9 @@ class Method:
     requires : tuple of str
         Quantities that must already be available *and valid* in the state.
     solver : str or None
-        Name of the numerical solver behind the row (``"lubrication"``); such rows are used only
-        when the caller enables that solver, and then ahead of the closed forms.
+        Name of the numerical solver behind the row (``"lubrication"``, ``"bem"``); such rows
+        are used only when the caller enables that solver, and then ahead of the closed forms
+        (in the order of :data:`METHODS`: BEM first).
     """
 
     quantity: str
@@ -154,6 +168,41 @@ _LUBRICATION_ROWS = tuple(
                    ("tension_front", "tension_front")))
 
 
+# BEM vesicle (issue 6): the full Stokes problem, no lubrication approximation. Tested for
+# 0.6 <= nu <= 0.98 up to lam/lam_c = 0.98 (delta >= 0.02); closer to lam_c a cold start can
+# drift to a spurious nearly closed film (bem.vesicle docstring) and needs continuation.
+BEM_RANGE = ValidityRange.of("tested range of bem.vesicle.solve_vesicle (issue 6)",
+                             nu=(0.6, 0.98), delta=(0.02, 1.0))
+#: Ca_B used by the BEM rows when the estimate has none (Chen et al. 2020 use 50).
+BEM_DEFAULT_CA_B = 50.0
+
+
+@functools.lru_cache(maxsize=16)
+def _bem_result(nu: float, lam: float, ca_b: float):
+    """One :func:`bem.vesicle.solve_vesicle` per (nu, lam, Ca_B), converged or not (minutes)."""
+    from bem import vesicle  # lazy: numba loads only when the BEM is enabled
+    return vesicle.solve_vesicle(nu, lam, ca_b=ca_b)
+
+
+def _bem(key: str):
+    def evaluate(s: dict):
+        res = _bem_result(s["nu"], s["lam"], s.get("ca_b", BEM_DEFAULT_CA_B))
+        if not res.success:
+            raise SolverNotConverged(f"BEM vesicle solver did not converge: {res.message}")
+        if key == "tension_front":                 # table unit: eta V (result: eta U)
+            return res.tension_front / res.V_over_U
+        return getattr(res, key)
+    return evaluate
+
+
+_BEM_ROWS = tuple(
+    Method(q, "bem_vesicle", "bem.vesicle.solve_vesicle (issue 6)"
+           + (" (minimum gap)" if q == "film" else ""), BEM_RANGE, _bem(key), solver="bem")
+    for q, key in (("V_over_U", "V_over_U"), ("film", "film_min"), ("ell", "ell"),
+                   ("dp_plus_R0", "dp_plus_R0"), ("shape_class", "shape_class"),
+                   ("tension_front", "tension_front")))
+
+
 def _fahraeus_tube(s: dict) -> float:
     return viscosity.tube_hematocrit_fahraeus(s["diameter_um"], s["discharge_hematocrit"], constants="pries1992")
 
@@ -167,6 +216,7 @@ def _eta_pries1992(s: dict) -> float:
 
 
 METHODS: tuple[Method, ...] = (
+    *_BEM_ROWS,
     *_LUBRICATION_ROWS,
     Method("V_over_U", "small_sphere_faxen", "Chen et al. 2020 eq. small1 (Faxen)",
            SMALL_VESICLE_RANGE, lambda s: asymptotics.speed_small_sphere(s["lam"])),

@@ -595,3 +595,117 @@ def test_tiny_reduced_volume_is_rejected_or_finite():
         assert exc.name == "nu"
     else:
         json.dumps(e.to_dict(), allow_nan=False)
+
+
+# ------------------------------------------------------------------------------------------
+# The BEM vesicle as an opt-in solver row (issue 6). A real solve takes minutes: the solver is
+# replaced by a fake that returns a VesicleResult with distinctive numbers and counts its calls.
+# ------------------------------------------------------------------------------------------
+
+BEM_QUANTITIES = ("V_over_U", "film", "ell", "dp_plus_R0", "shape_class", "tension_front")
+
+
+class FakeBem:
+    """Stand-in for bem.vesicle.solve_vesicle: numbers no closed form gives, calls recorded."""
+
+    def __init__(self):
+        self.calls, self.success = [], True
+
+    def __call__(self, nu, lam=None, *, ca_b=50.0, **kwargs):
+        from bem.results import VesicleResult
+        self.calls.append((nu, lam, ca_b))
+        return VesicleResult(nu=nu, lam=lam, lam_c=ref_lam_c(nu), ca_b=ca_b,
+                             success=self.success, message="fake: no convergence"
+                             if not self.success else "fake", V_over_U=1.2345,
+                             dp_plus_R0=123.4, ell=3.21, film_min=0.0432, tension_front=6.5,
+                             shape_class="parachute")
+
+
+@pytest.fixture
+def fake_bem(monkeypatch):
+    import bem.vesicle
+    from correlations import registry
+    solver = FakeBem()
+    registry._bem_result.cache_clear()
+    monkeypatch.setattr(bem.vesicle, "solve_vesicle", solver)
+    yield solver
+    registry._bem_result.cache_clear()
+
+
+def _near_critical(nu=0.9, ratio=0.95):
+    return nu, ratio * ref_lam_c(nu)
+
+
+def test_bem_rows_come_first_when_enabled_with_one_solve(fake_bem):
+    nu, lam = _near_critical()              # delta = 0.05: closed forms and lubrication valid
+    e = estimate_dimensionless(nu, lam, solvers=("bem",))
+    q = e.quantities
+    assert all(q[k].method == "bem_vesicle" and q[k].valid for k in BEM_QUANTITIES)
+    assert (q["V_over_U"].value, q["dp_plus_R0"].value, q["ell"].value) == (1.2345, 123.4, 3.21)
+    assert q["film"].value == 0.0432 and q["shape_class"].value == "parachute"
+    assert q["tension_front"].value == pytest.approx(6.5 / 1.2345, rel=1e-15)   # eta V
+    assert e["dp_plus_R"] == pytest.approx(123.4 / lam, rel=1e-15)
+    assert fake_bem.calls == [(nu, lam, 50.0)]          # one cached solve for six rows
+    assert e.converged and not any("--solver bem" in n for n in e.notes)
+
+
+def test_bem_precedes_the_lubrication_solver(fake_bem, monkeypatch):
+    from correlations import registry
+
+    def never(*args):
+        raise AssertionError("the lubrication solver ran although the BEM row was valid")
+    monkeypatch.setattr(registry, "_lubrication_solution", never)
+    e = estimate_dimensionless(*_near_critical(), 30.0, solvers=("lubrication", "bem"))
+    assert [e.quantities[k].method for k in BEM_QUANTITIES] == ["bem_vesicle"] * 6
+    assert fake_bem.calls[0][2] == 30.0                 # the case's Ca_B reaches the solver
+
+
+def test_bem_is_absent_unless_enabled_but_noted(fake_bem):
+    e = estimate_dimensionless(*_near_critical())
+    assert not any(q.method == "bem_vesicle" for q in e.quantities.values())
+    assert e.quantities["V_over_U"].method == "near_critical_barakat2018a"
+    assert any("--solver bem" in n and "minutes" in n for n in e.notes)
+    assert fake_bem.calls == []
+
+
+def test_where_nothing_else_is_valid_the_bem_is_only_suggested(fake_bem):
+    e = estimate()                            # RBC in a 4 um tube: intermediate confinement
+    assert e["V_over_U"] is None and fake_bem.calls == []
+    assert any(n.startswith("No closed-form") and "--solver bem" in n for n in e.notes)
+    solved = estimate(solvers=("bem",))
+    assert solved["V_over_U"] == 1.2345 and solved.quantities["V_over_U"].valid
+    assert fake_bem.calls == [(solved["nu"], solved["lam"], solved["ca_b"])]
+
+
+def test_bem_outside_its_tested_range_is_neither_run_nor_noted(fake_bem):
+    e = estimate_dimensionless(*_near_critical(0.9, 0.99), solvers=())   # delta = 0.01 < 0.02
+    f = estimate_dimensionless(*_near_critical(0.5, 0.9), solvers=("bem",))  # nu < 0.6
+    g = estimate_dimensionless(*_near_critical(0.9, 0.99), solvers=("bem",))
+    assert fake_bem.calls == []
+    assert not any("bem" in n for n in e.notes + f.notes + g.notes)
+    assert g.quantities["V_over_U"].method == "near_critical_barakat2018a"
+
+
+def test_bem_failure_is_reported_once_and_the_closed_forms_answer(fake_bem):
+    fake_bem.success = False
+    nu, lam = _near_critical()
+    e = estimate_dimensionless(nu, lam, solvers=("bem",))
+    assert e.converged is False and e.to_dict()["converged"] is False
+    assert any("bem solver was enabled but did not converge" in n and "fake" in n
+               for n in e.notes)
+    assert e.quantities["V_over_U"].method == "near_critical_barakat2018a"
+    assert fake_bem.calls == [(nu, lam, 50.0)]          # the failure is cached, not retried
+
+
+def test_estimate_cli_solver_bem(fake_bem, capsys):
+    from correlations.cli import main
+    nu, lam = _near_critical()
+    code = main(["estimate", "--nu", str(nu), "--lam", repr(lam), "--solver", "bem", "--json"])
+    obj = json.loads(capsys.readouterr().out)
+    assert code == 0 and obj["V_over_U"] == 1.2345
+    assert obj["methods"]["dp_plus_R0"]["method"] == "bem_vesicle"
+    fake_bem.success = False
+    from correlations import registry
+    registry._bem_result.cache_clear()
+    code = main(["estimate", "--nu", str(nu), "--lam", repr(lam), "--solver", "bem", "--json"])
+    assert code == 1 and json.loads(capsys.readouterr().out)["converged"] is False

@@ -1,0 +1,243 @@
+r"""Steady BEM vesicle swept over the confinement at fixed reduced volume, by continuation.
+
+Nondimensionalisation as in :mod:`bem.vesicle`: tube radius R = 1, viscosity eta = 1, mean
+velocity of the undisturbed Poiseuille flow U = 1; ``lam`` = R0/R (R0 the radius of the sphere
+of equal volume), ``lam_c`` the critical confinement of ``nu``, ``ca_b`` = eta U R0^2/kappa.
+
+Method (natural-parameter continuation in lam): the points are solved in order of increasing
+lam; the first starts from the seed :func:`bem.vesicle.solve_vesicle` chooses (the lubrication
+shape, or the caller's ``initial``), every later one from the last *converged* result
+(``initial=`` that :class:`~bem.results.VesicleResult`, whose spectral shape is the seed). Going
+from the less to the more confined shape is the direction :mod:`bem.vesicle` recommends: a cold
+start near lam_c can drift to a spurious, nearly closed film. A point that fails is kept in the
+output with ``success`` False and its reason, and the next point starts again from the last
+converged one.
+
+Each point costs a full :func:`~bem.vesicle.solve_vesicle`. Measured on 2 shared cores at
+nu = 0.98, Ca_B = 50, 16 modes: lam = 0.3 cold 15-27 s, lam = 0.4 continued from 0.3 in 6 s
+(cold: 29 s); at the default automatic refinement (up to 40 modes) and nearer lam_c a point takes
+minutes, a sweep of ten points tens of minutes. Progress goes to the ``bem.sweep`` logger (INFO, one
+line per point) and to the optional ``progress`` callback.
+
+Output: :func:`save_sweep` writes one CSV row per point (:data:`SWEEP_COLUMNS`) and a JSON with
+the parameters, atomically (:func:`lubrication.io.atomic_write`).
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import logging
+import math
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from lubrication.checks import InvalidParameterError, as_finite, check_positive
+from lubrication.geometry import resolve_confinement
+from lubrication.io import atomic_write
+
+__all__ = ["SWEEP_COLUMNS", "save_sweep", "sweep_table", "sweep_vesicle"]
+
+log = logging.getLogger(__name__)
+
+#: Columns of the sweep CSV (one row per point), with their units.
+SWEEP_COLUMNS = (
+    ("nu", "reduced volume [-]"),
+    ("lam", "confinement R0/R [-]"),
+    ("lam_c", "critical confinement [-]"),
+    ("lam_ratio", "lam/lam_c [-]"),
+    ("ca_b", "bending capillary number eta U R0^2/kappa [-]"),
+    ("V_over_U", "vesicle velocity over the mean velocity [-]"),
+    ("dp_plus_R0", "extra pressure drop dp+ R0/(eta U) [-]"),
+    ("ell", "length L/R [-]"),
+    ("film_min", "smallest gap 1 - max r/R [-]"),
+    ("tension_max", "largest membrane tension gamma_max/(eta U) [-]"),
+    ("shape_class", "bullet or parachute"),
+    ("converged", "the solver's success flag"),
+    ("residual", "steady residual max|u - V e_x| [U]"),
+    ("volume_error", "relative volume error of the panel quadrature [-]"),
+    ("area_error", "relative area error of the panel quadrature [-]"),
+    ("runtime", "wall-clock time of the point [s]"),
+    ("message", "the solver's message (why a point failed)"),
+)
+
+#: ``progress(i, n, result, seconds)``: point i of n (1-based, in solve order) is done.
+Progress = Callable[[int, int, object, float], None]
+
+
+def _confinements(nu, lams, lam_ratios) -> tuple[float, np.ndarray, float]:
+    """Checked (nu, lam of each point, lam_c): every point 0 < lam < lam_c(nu)."""
+    if (lams is None) == (lam_ratios is None):
+        given = "neither" if lams is None else "both lams and lam_ratios"
+        raise InvalidParameterError("lams", given, "exactly one of lams and lam_ratios")
+    name = "lams" if lam_ratios is None else "lam_ratios"
+    values = as_finite(name, lams if lam_ratios is None else lam_ratios,
+                       "a non-empty 1-d sequence of finite numbers")
+    values = np.atleast_1d(values)
+    if values.ndim != 1 or values.size == 0:
+        raise InvalidParameterError(name, np.array2string(values),
+                                    "a non-empty 1-d sequence of finite numbers")
+    by_ratio, reason = lam_ratios is not None, "a vesicle with excess area (nu < 1) is needed"
+    points = [resolve_confinement(nu, None if by_ratio else v, v if by_ratio else None,
+                                  nu_reason=reason) for v in map(float, values)]
+    return points[0][0], np.array([p[1] for p in points]), points[0][2]
+
+
+def _with_runtime(res, seconds: float):
+    """``res`` with ``timings["total_s"]`` set to the measured time if the solver gave none."""
+    if "total_s" in res.timings:
+        return res
+    return dataclasses.replace(res, timings={**res.timings, "total_s": seconds})
+
+
+def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
+                  lam_ratios: Sequence[float] | None = None, ca_b: float = 50.0,
+                  progress: Progress | None = None, **solver_kwargs) -> list:
+    r"""Steady vesicles at several confinements, solved by continuation in increasing lam.
+
+    Parameters
+    ----------
+    nu : float
+        Reduced volume, 0 < nu < 1 [-].
+    lams, lam_ratios : sequence of float
+        Confinements R0/R, or lam/lam_c; exactly one, each 0 < lam < lam_c(nu) [-]. Any order:
+        the points are *solved* in order of increasing lam.
+    ca_b : float
+        Bending capillary number eta U R0^2/kappa, > 0 [-].
+    progress : callable, optional
+        ``progress(i, n, result, seconds)`` after each point, i = 1..n in solve order (the
+        ``bem.sweep`` logger gets the same line at INFO level).
+    **solver_kwargs
+        Passed to every :func:`bem.vesicle.solve_vesicle` call (``n_modes``, ``tol``,
+        ``residual_tol``, ``max_modes``, ``density_terms``, ...). ``initial`` seeds the first
+        point only; later points start from the last converged result.
+
+    Returns
+    -------
+    list of VesicleResult
+        In the order of ``lams`` (or ``lam_ratios``). A failed point is kept with ``success``
+        False and the solver's message; ``timings["total_s"]`` is its wall-clock time.
+
+    Raises
+    ------
+    InvalidParameterError, CannotPassError
+        Bad input, checked for every point before the first solve (lam >= lam_c: CannotPassError).
+
+    Examples
+    --------
+    Two points at nu = 0.98 (about 30 s, hence skipped in the doctests):
+
+    >>> out = sweep_vesicle(0.98, [0.4, 0.3], n_modes=16, tol=1e-2,
+    ...                     residual_tol=1e-3)     # doctest: +SKIP
+    >>> [r.lam for r in out], [r.success for r in out], out[0].seed    # doctest: +SKIP
+    ([0.4, 0.3], [True, True], 'initial')
+    """
+    from . import vesicle  # lazy: numba loads only when a sweep runs
+
+    nu, lam, lam_c = _confinements(nu, lams, lam_ratios)
+    ca_b = float(check_positive("ca_b", ca_b, reason="Ca_B = eta U R0^2/kappa"))
+    if not math.isfinite(ca_b):
+        raise InvalidParameterError("ca_b", ca_b, "a finite positive number")
+    for key in ("lam", "lam_ratio"):
+        if key in solver_kwargs:
+            raise InvalidParameterError(key, str(solver_kwargs[key]),
+                                        "set by the sweep, not a solver option")
+    start = solver_kwargs.pop("initial", None)
+    order = np.argsort(lam, kind="stable")
+    n = int(lam.size)
+    results: list = [None] * n
+    previous = start                                   # last converged result (or the seed)
+    for i, k in enumerate(order, start=1):
+        clock = time.perf_counter()
+        res = vesicle.solve_vesicle(nu, float(lam[k]), ca_b=ca_b, initial=previous,
+                                    **solver_kwargs)
+        seconds = time.perf_counter() - clock
+        res = results[k] = _with_runtime(res, seconds)
+        if res.success:
+            previous = res
+        log.info("sweep nu=%g point %d/%d: lam=%.6g (lam/lam_c=%.4f) %s in %.1f s%s", nu, i, n,
+                 res.lam, res.lam / lam_c, "converged" if res.success else "NOT converged",
+                 seconds, "" if res.success else f" ({res.message})")
+        if progress is not None:
+            progress(i, n, res, seconds)
+    return results
+
+
+def _cell(res, key: str):
+    """Value of column ``key`` for one result: JSON/CSV-ready (non-finite floats -> None)."""
+    if key == "converged":
+        return bool(res.success)
+    if key == "runtime":
+        value = res.timings.get("total_s")
+    else:
+        value = getattr(res, key)
+    if hasattr(value, "item"):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def sweep_table(results) -> list[dict]:
+    """One dict per result with the keys of :data:`SWEEP_COLUMNS` (None for NaN)."""
+    return [{key: _cell(r, key) for key, _ in SWEEP_COLUMNS} for r in results]
+
+
+def save_sweep(directory, results, parameters: dict | None = None, *,
+               profiles: bool = True, complete: bool = True) -> list[Path]:
+    """Write the sweep to ``directory``: CSV (one row per point) and JSON, each atomically.
+
+    Parameters
+    ----------
+    directory : path
+        Created if missing.
+    results : sequence of VesicleResult
+        The points, one nu and Ca_B (as returned by :func:`sweep_vesicle`).
+    parameters : dict, optional
+        Extra run parameters recorded in the JSON (e.g. the solver options).
+    profiles : bool
+        Also write each point's ``VesicleResult.save`` pair (JSON + CSV profiles).
+    complete : bool
+        Recorded in the JSON; False while a sweep is still running (partial saves).
+
+    Returns
+    -------
+    list of Path
+        The sweep CSV, the sweep JSON, then the profile files.
+
+    The stem is ``bem_vesicle_sweep_nu<nu>_cab<ca_b>``; an interrupted write leaves the previous
+    file (or none), never a half-written one.
+    """
+    if not results:
+        raise InvalidParameterError("results", "[]", "at least one VesicleResult")
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    r0 = results[0]
+    stem = f"bem_vesicle_sweep_nu{r0.nu:.6g}_cab{r0.ca_b:.6g}"
+    table = sweep_table(results)
+
+    def write_csv(f):
+        w = csv.DictWriter(f, fieldnames=[k for k, _ in SWEEP_COLUMNS], lineterminator="\n")
+        w.writeheader()
+        w.writerows({k: ("" if v is None else repr(v) if isinstance(v, float) else v)
+                     for k, v in row.items()} for row in table)
+
+    paths = [atomic_write(directory / f"{stem}.csv", write_csv)]
+    extra = []
+    if profiles:
+        for r in results:
+            extra.extend(r.save(directory))
+    data = {"nu": r0.nu, "lam_c": r0.lam_c, "ca_b": r0.ca_b, "n_points": len(results),
+            "complete": bool(complete), "n_converged": sum(bool(r.success) for r in results),
+            "converged": all(bool(r.success) for r in results),
+            "lams": [float(r.lam) for r in results], "parameters": dict(parameters or {}),
+            "columns": [list(c) for c in SWEEP_COLUMNS], "points": table,
+            "profile_files": [p.name for p in extra], "provenance": r0.provenance}
+    paths.append(atomic_write(directory / f"{stem}.json",
+                              lambda f: json.dump(data, f, indent=2, sort_keys=True,
+                                                  allow_nan=False)))
+    return paths + extra
