@@ -299,7 +299,7 @@ class VesicleResult:
     refinement : list
         (modes, residual, V/U, Δp⁺R0/(ηU), γ_max) of every level solved.
     seed : str
-        Origin of the initial shape ("lubrication", "spheroid", "initial").
+        Origin of the initial shape ("lubrication", "spheroid", "initial", "continuation ...").
     s, x, r, psi, tension, shear_membrane : ndarray
         Profiles from rear to front pole, see :data:`VESICLE_PROFILE_COLUMNS`.
     modes, density, tension_modes : ndarray
@@ -354,6 +354,12 @@ class VesicleResult:
     def lam_ratio(self) -> float:
         return self.lam / self.lam_c
 
+    @property
+    def bie_solves(self) -> int:
+        """Boundary-integral solves (BEM evaluations) of the whole solve, continuation rungs
+        included (to compare with the time steps of a time-marching solver)."""
+        return int(sum(v.get("evaluations", 0) for v in self.iterations.values()))
+
     def curve(self):
         """The fine solution's :class:`bem.shape.SpectralCurve` (centroid at x = 0)."""
         from .shape import SpectralCurve
@@ -374,6 +380,7 @@ class VesicleResult:
         out = {k: _clean(getattr(self, k)) for k in self._SCALARS}
         out["converged"] = bool(self.success)
         out["lam_ratio"] = _clean(self.lam_ratio)
+        out["bie_solves"] = self.bie_solves
         if shape:
             out["shape"] = {k: _clean(getattr(self, k)) for k in
                             ("x", "r", "tension", "modes", "density", "tension_modes")}

@@ -430,6 +430,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     else:
         sequence = list(range(16, max_modes + 1, 8))
     seed_source = "initial"
+    rung_log = {}
     density_terms = int(check_range("density_terms", density_terms, 1, 64))
     if continuation:
         rung_kw = {"ca_b": ca_b, "n_modes": int(check_range("rung_modes", rung_modes, 8, 256)),
@@ -438,6 +439,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         rung = None
         for q in _rungs(ratio):
             rung = solve_vesicle(nu, lam_ratio=q, initial=rung, **rung_kw)
+            rung_log[f"rung{q:g}"] = {
+                "evaluations": sum(v["evaluations"] for v in rung.iterations.values()),
+                "seconds": rung.timings.get("total_s", math.nan), "residual": rung.residual}
             if rung.modes.size == 0 or "film closes" in rung.message \
                     or "self-intersects" in rung.message:
                 return VesicleResult(
@@ -472,7 +476,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     if density != "uniform":
         build = film_density if density == "film" else equidistributing_density
         seed = fit_curve(seed.sample, 0.0, 1.0, sequence[0], density=build(seed, density_terms))
-    levels, timings, iterations = [], {}, {}
+    levels, timings, iterations = [], {}, dict(rung_log)
     message = ""
     prev = seed
     for n in sequence:
