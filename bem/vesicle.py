@@ -80,7 +80,8 @@ from .shape import (
     spheroid_curve,
 )
 
-__all__ = ["VesicleOperator", "fit_lubrication", "lubrication_seed", "solve_vesicle", "spheroid_seed"]
+__all__ = ["NEAR_CRITICAL", "VesicleOperator", "capsule_seed", "fit_lubrication", "lubrication_seed",
+           "solve_vesicle", "spheroid_seed"]
 
 log = logging.getLogger(__name__)
 
@@ -217,14 +218,21 @@ class VesicleOperator(DropOperator):
 
 # ---------------------------------------------------------------------------- initial shapes
 def lubrication_seed(nu: float, lam: float, ca_b: float, n_modes: int):
-    """Spectral curve fitted to the lubrication solution at (nu, lam, ca_b); None if it fails.
-    Returns (curve, lubrication result)."""
+    """Spectral curve fitted to the lubrication solution at (nu, lam, ca_b); None if the solver
+    fails or the ``n_modes`` fit closes more than half of its gap (sharp parachute rims at small
+    nu). Returns (curve, lubrication result)."""
     from lubrication.solve import solve_lubrication
 
     lub = solve_lubrication(nu, lam, ca_b=ca_b)
     if not lub.success:
         return None, lub
-    return fit_lubrication(lub, n_modes), lub
+    curve = fit_lubrication(lub, n_modes)
+    gap = 1.0 - float(np.max(lub.r))
+    if 1.0 - curve.max_radius() < 0.5 * gap:             # sharp rim: the fit closes the film
+        log.info("lubrication seed rejected: %d-mode fit has gap %.3g (lubrication %.3g)",
+                 n_modes, 1.0 - curve.max_radius(), gap)
+        return None, lub
+    return curve, lub
 
 
 def fit_lubrication(lub, n_modes: int) -> SpectralCurve:
@@ -257,6 +265,35 @@ def spheroid_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
             hi = mid
     e = 0.5 * (lo + hi)
     c = fit_curve(spheroid_curve(1.0, e), 0.0, math.pi, n_modes)
+    return SpectralCurve.closed(c.modes, volume=4.0 / 3.0 * math.pi * lam**3)
+
+
+def capsule_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
+    r"""Cylinder with hemispherical caps of reduced volume ``nu`` and volume 4/3 pi lam^3.
+
+    Cap radius a and cylinder length L from :math:`V = \pi a^2 L + \tfrac43\pi a^3`,
+    :math:`A = 2\pi a L + 4\pi a^2`, i.e. :math:`\tfrac23\pi a^3 - \tfrac12 A a + V = 0`, the
+    cubic of the critical confinement (Chen et al. 2020 eq. lamc) with a in place of R: its
+    larger root is :math:`a = \lambda/\lambda_c(\nu) < 1`, so the capsule fits in the tube
+    whenever the vesicle can pass (a prolate spheroid of small nu and large lam does not).
+    """
+    from lubrication.geometry import critical_confinement
+
+    a = lam / critical_confinement(nu)
+    length = (4.0 * math.pi * (lam * nu ** (-1.0 / 3.0)) ** 2 - 4.0 * math.pi * a * a) \
+        / (2.0 * math.pi * a)
+    q = 0.5 * math.pi * a                                 # arc length of one cap
+
+    def curve(t):
+        t = np.asarray(t, dtype=float)
+        rear, front = t < q, t > q + length
+        th = np.where(rear, t / a, np.where(front, (t - q - length) / a + 0.5 * math.pi,
+                                            0.5 * math.pi))
+        x = np.where(rear, -a * np.cos(th), np.where(front, length - a * np.cos(th),
+                                                     t - q))
+        return x, a * np.sin(th), np.sin(th), np.cos(th)
+
+    c = fit_curve(curve, 0.0, 2.0 * q + length, n_modes)
     return SpectralCurve.closed(c.modes, volume=4.0 / 3.0 * math.pi * lam**3)
 
 
@@ -465,6 +502,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         if seed is None:
             seed = spheroid_seed(nu, lam, sequence[0])
             seed_source = "spheroid"
+            if seed.max_radius() > 0.95:                   # a spheroid of small nu: too fat
+                seed = capsule_seed(nu, lam, sequence[0])
+                seed_source = "capsule"
     elif isinstance(initial, VesicleResult):
         if initial.modes.size == 0:
             raise InvalidParameterError("initial", "a VesicleResult without a shape",
