@@ -76,7 +76,8 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
     ``exact_columns(payload)``, if given, returns {index: column} of Jacobian columns known
     exactly (e.g. the linear speed unknown). ``stall`` (e.g. 0.9): also stop, as converged
     to the floor, at the first accepted step that reduces |F| by less than this ratio, whatever
-    the Jacobian (for a coarse level that only seeds a finer one).
+    the Jacobian, or when a Broyden step fails with the Jacobian budget spent (for a coarse
+    level that only seeds a finer one).
     """
     z = np.array(z0, dtype=float)
     try:
@@ -123,6 +124,11 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
                 n_eval += n
                 n_jac, fresh = n_jac + 1, True
                 continue
+            if not fresh:
+                success = stall is not None               # a seed level may stop here
+                message = (f"Broyden step rejected with the difference-Jacobian budget "
+                           f"({max_jacobians}) spent (residual norm {norm:.2e})")
+                break
             d_gn, *_ = np.linalg.lstsq(J, -F, rcond=None)
             promised = 1.0 - float(np.linalg.norm(F + J @ d_gn) / norm) ** 2 if norm > 0 else 0.0
             if promised < 1e-3:
