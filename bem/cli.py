@@ -109,7 +109,8 @@ def cmd_bem_vesicle(args):
 
     from .vesicle import solve_vesicle
     res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
-                        n_modes=args.modes, tol=args.tol)
+                        n_modes=args.modes, tol=args.tol, residual_tol=args.residual_tol,
+                        max_modes=args.max_modes)
     out = _shape_result_json(res, "vesicle", args)
     method, pm = _method_and_error(res)
 
@@ -155,7 +156,8 @@ def cmd_bem_vesicle_sweep(args):
 
     from .sweep import save_sweep, sweep_table, sweep_vesicle
     points = _sweep_values(args)
-    solver = {"n_modes": args.modes, "tol": args.tol, "residual_tol": args.residual_tol}
+    solver = {"n_modes": args.modes, "tol": args.tol, "residual_tol": args.residual_tol,
+              "max_modes": args.max_modes}
     done = []
 
     def report(i, n, res, seconds):
@@ -191,6 +193,15 @@ def cmd_bem_vesicle_sweep(args):
     title = (f"Vesicle sweep (BEM), nu = {r0.nu:g}, Ca_B = {r0.ca_b:g}: "
              f"{out['n_converged']}/{len(results)} points converged")
     return out, format_rows(rows, title)
+
+
+def _refinement_options(p) -> None:
+    """--residual-tol and --max-modes of the vesicle commands."""
+    p.add_argument("--residual-tol", type=float, default=1e-4, dest="residual_tol",
+                   help="tolerance of the steady residual max|u - V e_x| (default 1e-4) [U]")
+    p.add_argument("--max-modes", type=int, default=40, dest="max_modes",
+                   help="largest number of shape modes of the automatic refinement (default "
+                        "40; near lam_c use 48 with --tol 1e-3 --residual-tol 1e-3)")
 
 
 def add_bem_parser(subparsers) -> None:
@@ -239,6 +250,7 @@ def add_bem_parser(subparsers) -> None:
     v.add_argument("--tol", type=float, default=1e-4,
                    help="relative tolerance of the refinement pair in V/U, dp+ and "
                         "gamma_max (default 1e-4) [-]")
+    _refinement_options(v)
     v.add_argument("--out", metavar="DIR", help="save the result as JSON + CSV profiles in DIR")
     v.add_argument("--plot", metavar="FILE", help="write the vesicle shape to FILE (PNG)")
     v.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -259,8 +271,7 @@ def add_bem_parser(subparsers) -> None:
     w.add_argument("--tol", type=float, default=1e-4,
                    help="relative tolerance of the refinement pair in V/U, dp+ and "
                         "gamma_max (default 1e-4) [-]")
-    w.add_argument("--residual-tol", type=float, default=1e-4, dest="residual_tol",
-                   help="tolerance of the steady residual max|u - V e_x| (default 1e-4) [U]")
+    _refinement_options(w)
     w.add_argument("--out", metavar="DIR", help="write the sweep CSV + JSON and each point's "
                                                 "JSON + CSV profiles to DIR (atomic)")
     w.add_argument("--plot", metavar="FILE", help="write the shapes of all points in the tube "

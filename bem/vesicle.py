@@ -37,21 +37,21 @@ Method:
 Near the critical confinement (thin film, gap h ≪ R) the velocity is set by the gap to a small
 *relative* error along the film and its entrance/exit transitions (length ~ sqrt(hR)), where the
 curvature is small: uniform arc length or a curvature-equidistributing density leave a residual
-floor ~5e-2 at 16–24 modes (λ/λc = 0.97). ``density="film"`` builds the arc-length density from
-the lubrication weight (h + h_min)^(-1/2) (:func:`bem.shape.film_density`); the panel breaks
-(graded by sqrt(gap) in τ) then also cluster there. The quadrature is not the limit (V/U of a
-fixed shape changes by 1e-7 from 8 to 24 membrane panels at λ/λc = 0.97). A cold start from
-the lubrication shape at λ/λc = 0.97 drifts to a spurious, nearly closed film (min gap 1.5e-3);
-continuation in λ/λc (0.9, 0.94, 0.97 with ``initial=`` the previous result) avoids it.
-Measured at ν = 0.9, Ca_B = 50 with ``density_terms=16, density="film"``: residual
-1.8e-2, 2.3e-3, 2.0e-4 at 16/24/32 modes for λ/λc = 0.9 (uniform: 4.5e-2 at 16); 2.9e-2,
-1.8e-2, 9.1e-3, 3.2e-3, 8.1e-4 at 16/24/32/40/48 modes for λ/λc = 0.97 (continuation; V/U
-1.02881, Δp⁺R0/(ηU) 245.9 at 48 modes vs lubrication 1.02895, 234.9), see
-``test_near_critical_matches_lubrication``.
+floor ~5e-2 at 16–24 modes (λ/λc = 0.97). ``density="film"`` (the default from λ/λc = 0.9)
+builds the arc-length density from the lubrication weight (h + h_min)^(-1/2)
+(:func:`bem.shape.film_density`); the panel breaks (graded by sqrt(gap) in τ) then also cluster
+there. The quadrature is not the limit (V/U of a fixed shape changes by 1e-7 from 8 to 24
+membrane panels at λ/λc = 0.97). A cold start from the lubrication shape at λ/λc = 0.97 drifts
+to a spurious, nearly closed film (min gap 1.5e-3); the default continuation in λ/λc (rungs
+0.9, 0.95, 0.975, ... below the target) avoids it. Measured at ν = 0.9, Ca_B = 50, 48 modes
+(docs/validation.md): λ/λc = 0.95, 0.97, 0.98 reach residuals 3.2e-4, 1.2e-3, 2.9e-3, V/U within
+0.04 % and Δp⁺ 6.8, 4.65, 3.2 % above lubrication, in ~4 min per point. Long vesicles (ν ≲ 0.7
+near λc) are beyond one global sine series of ~40 modes: see the validation report.
 
 Initial shapes: the lubrication solution at the same (ν, λ, Ca_B)
 (:func:`lubrication.solve.solve_lubrication`) mapped to the spectral curve with
-:func:`bem.shape.fit_curve`; if it fails, a prolate spheroid of the right ν.
+:func:`bem.shape.fit_curve`; if it fails (or the fit closes the film), a prolate spheroid of the
+right ν, or where that does not fit in the tube a capsule of radius λ/λc (:func:`capsule_seed`).
 """
 
 from __future__ import annotations

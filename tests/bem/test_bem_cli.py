@@ -120,6 +120,9 @@ def test_not_converged_exits_1_with_the_json(capsys):
     (["bem", "drop", "--lam", "0.8", "--ca", "inf"], ("ca", "inf")),
     (["bem", "drop", "--lam", "0.8"], ("--ca",)),
     (["bem", "drop", "--lam", "abc", "--ca", "0.1"], ("--lam", "abc")),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--max-modes", "4"], ("max_modes", "4")),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--residual-tol", "0"],
+     ("residual_tol", "0")),
     (["bem"], ("bem_command",)),
 ])
 def test_invalid_input_exits_2_with_one_line(capsys, argv, needles):
