@@ -12,6 +12,20 @@ import numpy as np
 __all__ = ["plot_shape", "plot_vesicle_sweep"]
 
 
+def _draw_tube(ax, half: float) -> None:
+    """Tube wall r = ±R over |x| <= half, axis, flow arrow, equal axes with labels."""
+    for y in (1.0, -1.0):
+        ax.plot([-half, half], [y, y], "k-", lw=2)
+    ax.axhline(0.0, color="0.6", lw=0.6, ls="-.")
+    ax.annotate("", xy=(-0.6 * half, 0.0), xytext=(-0.95 * half, 0.0),
+                arrowprops={"arrowstyle": "->", "color": "0.4"})
+    ax.set_xlim(-half, half)
+    ax.set_ylim(-1.15, 1.15)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x/R [-]")
+    ax.set_ylabel("r/R [-]")
+
+
 def plot_shape(result, ax=None):
     """Meridional section of the drop (or rigid sphere) in the tube, mirrored about the axis.
 
@@ -40,16 +54,7 @@ def plot_shape(result, ax=None):
             alpha=0.25, lw=0)
     ax.plot(x, r, "-", color="tab:blue", lw=1.5)
     ax.plot(x, -r, "-", color="tab:blue", lw=1.5)
-    for y in (1.0, -1.0):
-        ax.plot([-half, half], [y, y], "k-", lw=2)
-    ax.axhline(0.0, color="0.6", lw=0.6, ls="-.")
-    ax.annotate("", xy=(-0.6 * half, 0.0), xytext=(-0.95 * half, 0.0),
-                arrowprops={"arrowstyle": "->", "color": "0.4"})
-    ax.set_xlim(-half, half)
-    ax.set_ylim(-1.15, 1.15)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x/R [-]")
-    ax.set_ylabel("r/R [-]")
+    _draw_tube(ax, half)
     title = f"λ = {result.lam:.4g}"
     if hasattr(result, "ca"):
         title += f", Ca = {result.ca:.4g}"
@@ -101,16 +106,7 @@ def plot_vesicle_sweep(results, ax=None):
         ax.plot(x, r, **style)
         ax.plot(x, -r, **style)
         drawn += 1
-    for y in (1.0, -1.0):
-        ax.plot([-half, half], [y, y], "k-", lw=2)
-    ax.axhline(0.0, color="0.6", lw=0.6, ls="-.")
-    ax.annotate("", xy=(-0.6 * half, 0.0), xytext=(-0.95 * half, 0.0),
-                arrowprops={"arrowstyle": "->", "color": "0.4"})
-    ax.set_xlim(-half, half)
-    ax.set_ylim(-1.15, 1.15)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x/R [-]")
-    ax.set_ylabel("r/R [-]")
+    _draw_tube(ax, half)
     ax.figure.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax,
                        label="λ = R0/R [-]", shrink=0.8)
     title = ""

@@ -37,7 +37,7 @@ lubrication``; otherwise the estimate only notes that the solver covers the case
 enabled the BEM rows come first (most accurate, slowest), then the lubrication rows:
 
 ====================  =============================  ==============================================
-V/U, film (minimum     bem_vesicle                    0.6 <= nu <= 0.98, delta >= 0.02, i.e.
+V/U, film (minimum     bem_vesicle                    0.9 <= nu <= 0.98, delta >= 0.02, i.e.
 gap), ell, dp+, shape,                                lam/lam_c <= 0.98 (BEM_RANGE); Ca_B from the
 front tension                                         case, 50 if unknown; minutes per point
 V/U, film (minimum     lubrication_solver             0.6 <= nu <= 0.98, delta <= 0.3
@@ -47,8 +47,7 @@ front tension                                         unknown; seconds per point
 
 The BEM is never run unless the caller enables it, not even where no other method is valid:
 there the estimate only says that the BEM covers the case (a solve takes minutes). One solve per
-(nu, lam, Ca_B) serves all BEM rows of an estimate (:func:`_bem_result` is cached, failures
-included, so a solve that did not converge is not repeated for every row).
+(nu, lam, Ca_B) serves all rows of a solver (:func:`_solver_rows`).
 """
 
 from __future__ import annotations
@@ -144,35 +143,14 @@ LUBRICATION_DEFAULT_CA_B = 50.0
 @functools.lru_cache(maxsize=16)
 def _lubrication_solution(nu: float, lam: float, ca_b: float):
     from lubrication.solve import solve_lubrication
-    res = solve_lubrication(nu, lam, ca_b=ca_b)
-    if not res.success:
-        raise SolverNotConverged(f"lubrication solver did not converge: {res.message}")
-    return res
+    return solve_lubrication(nu, lam, ca_b=ca_b)
 
 
-def _lubrication(key: str):
-    def evaluate(s: dict):
-        res = _lubrication_solution(s["nu"], s["lam"], s.get("ca_b", LUBRICATION_DEFAULT_CA_B))
-        if key == "tension_front":                 # table unit: eta V (result: eta U)
-            return res.tension_front / res.V_over_U
-        return getattr(res, key)
-    return evaluate
-
-
-_LUBRICATION_ROWS = tuple(
-    Method(q, "lubrication_solver", "Secomb et al. 1986 / Barakat & Shaqfeh 2018b lubrication "
-           "model, lubrication.solve" + (" (minimum gap)" if q == "film" else ""),
-           LUBRICATION_RANGE, _lubrication(key), solver="lubrication")
-    for q, key in (("V_over_U", "V_over_U"), ("film", "film_min"), ("ell", "ell"),
-                   ("dp_plus_R0", "dp_plus_R0"), ("shape_class", "shape_class"),
-                   ("tension_front", "tension_front")))
-
-
-# BEM vesicle (issue 6): the full Stokes problem, no lubrication approximation. Tested for
-# 0.6 <= nu <= 0.98 up to lam/lam_c = 0.98 (delta >= 0.02); closer to lam_c a cold start can
-# drift to a spurious nearly closed film (bem.vesicle docstring) and needs continuation.
-BEM_RANGE = ValidityRange.of("tested range of bem.vesicle.solve_vesicle (issue 6)",
-                             nu=(0.6, 0.98), delta=(0.02, 1.0))
+# BEM vesicle (issue 6): the full Stokes problem, no lubrication approximation. Converged and
+# validated for nu = 0.9 up to lam/lam_c = 0.98 and nu = 0.98 (docs/validation.md); long
+# vesicles (nu <~ 0.7) near lam_c are not resolved, so the range stops at nu = 0.9.
+BEM_RANGE = ValidityRange.of("validated range of bem.vesicle.solve_vesicle (issue 6)",
+                             nu=(0.9, 0.98), delta=(0.02, 1.0))
 #: Ca_B used by the BEM rows when the estimate has none (Chen et al. 2020 use 50).
 BEM_DEFAULT_CA_B = 50.0
 
@@ -184,23 +162,34 @@ def _bem_result(nu: float, lam: float, ca_b: float):
     return vesicle.solve_vesicle(nu, lam, ca_b=ca_b)
 
 
-def _bem(key: str):
-    def evaluate(s: dict):
-        res = _bem_result(s["nu"], s["lam"], s.get("ca_b", BEM_DEFAULT_CA_B))
-        if not res.success:
-            raise SolverNotConverged(f"BEM vesicle solver did not converge: {res.message}")
-        if key == "tension_front":                 # table unit: eta V (result: eta U)
-            return res.tension_front / res.V_over_U
-        return getattr(res, key)
-    return evaluate
+def _solver_rows(solver: str, name: str, reference: str, rng: ValidityRange, solve,
+                 default_ca_b: float) -> tuple[Method, ...]:
+    """Rows of one numerical solver for V/U, film (minimum gap), ell, dp+, shape class and
+    front tension; ``solve(nu, lam, ca_b)`` is cached, so one solve serves all rows (failures
+    included, so a solve that did not converge is not repeated for every row)."""
+    def row(key: str):
+        def evaluate(s: dict):
+            res = solve(s["nu"], s["lam"], s.get("ca_b", default_ca_b))
+            if not res.success:
+                raise SolverNotConverged(f"{solver} solver did not converge: {res.message}")
+            if key == "tension_front":                 # table unit: eta V (result: eta U)
+                return res.tension_front / res.V_over_U
+            return getattr(res, key)
+        return evaluate
+    return tuple(
+        Method(q, name, reference + (" (minimum gap)" if q == "film" else ""), rng, row(key),
+               solver=solver)
+        for q, key in (("V_over_U", "V_over_U"), ("film", "film_min"), ("ell", "ell"),
+                       ("dp_plus_R0", "dp_plus_R0"), ("shape_class", "shape_class"),
+                       ("tension_front", "tension_front")))
 
 
-_BEM_ROWS = tuple(
-    Method(q, "bem_vesicle", "bem.vesicle.solve_vesicle (issue 6)"
-           + (" (minimum gap)" if q == "film" else ""), BEM_RANGE, _bem(key), solver="bem")
-    for q, key in (("V_over_U", "V_over_U"), ("film", "film_min"), ("ell", "ell"),
-                   ("dp_plus_R0", "dp_plus_R0"), ("shape_class", "shape_class"),
-                   ("tension_front", "tension_front")))
+_LUBRICATION_ROWS = _solver_rows(
+    "lubrication", "lubrication_solver", "Secomb et al. 1986 / Barakat & Shaqfeh 2018b "
+    "lubrication model, lubrication.solve", LUBRICATION_RANGE,
+    lambda *a: _lubrication_solution(*a), LUBRICATION_DEFAULT_CA_B)   # looked up at call time
+_BEM_ROWS = _solver_rows("bem", "bem_vesicle", "bem.vesicle.solve_vesicle (issue 6)", BEM_RANGE,
+                         lambda *a: _bem_result(*a), BEM_DEFAULT_CA_B)
 
 
 def _fahraeus_tube(s: dict) -> float:
