@@ -3,6 +3,7 @@
 import os
 
 import matplotlib
+import pytest
 from hypothesis import HealthCheck, settings
 
 matplotlib.use("Agg")
@@ -12,3 +13,19 @@ settings.register_profile("ci", deadline=None, derandomize=True, max_examples=60
                           suppress_health_check=[HealthCheck.too_slow])
 settings.register_profile("thorough", deadline=None, max_examples=1000)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+@pytest.fixture
+def cli(capsys):
+    """Run the vesicle-tube command line in-process: ``cli(*argv) -> (exit code, stdout,
+    stderr)`` (SystemExit, e.g. from argparse, gives its code)."""
+    from correlations.cli import main
+
+    def run(*argv):
+        try:
+            code = main(list(argv))
+        except SystemExit as exc:
+            code = exc.code
+        out, err = capsys.readouterr()
+        return code, out, err
+    return run

@@ -21,7 +21,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from correlations.cli import main
 from correlations.viscosity import relative_viscosity
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -40,16 +39,6 @@ def strict_json(text: str) -> dict:
     obj = json.loads(text, parse_constant=_reject_constant)
     assert isinstance(obj, dict)
     return obj
-
-
-def run(capsys, *argv):
-    """Run the CLI in-process; return (exit code, stdout, stderr)."""
-    try:
-        code = main(list(argv))
-    except SystemExit as exc:            # argparse errors exit through SystemExit
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def ref_lam_c(nu):
@@ -103,9 +92,9 @@ def _unit_column(table: str) -> set:
 
 
 @pytest.mark.parametrize("name", COMMANDS)
-def test_human_table_with_units(capsys, name):
+def test_human_table_with_units(cli, name):
     argv, _, units = COMMANDS[name]
-    code, out, err = run(capsys, *argv)
+    code, out, err = cli(*argv)
     assert code == 0, err
     assert err == ""
     assert "{" not in out                  # a table, not JSON
@@ -115,9 +104,9 @@ def test_human_table_with_units(capsys, name):
 
 
 @pytest.mark.parametrize("name", COMMANDS)
-def test_json_is_one_object_with_the_fixed_keys(capsys, name):
+def test_json_is_one_object_with_the_fixed_keys(cli, name):
     argv, keys, _ = COMMANDS[name]
-    code, out, err = run(capsys, *argv, "--json")
+    code, out, err = cli(*argv, "--json")
     assert code == 0, err
     obj = strict_json(out)
     assert obj["converged"] is True
@@ -127,8 +116,8 @@ def test_json_is_one_object_with_the_fixed_keys(capsys, name):
     assert all(k == k.strip() and " " not in k and "-" not in k for k in obj)   # snake_case keys
 
 
-def test_estimate_default_json_values(capsys):
-    code, out, _ = run(capsys, "estimate", "--json")
+def test_estimate_default_json_values(cli):
+    code, out, _ = cli("estimate", "--json")
     obj = strict_json(out)
     assert code == 0 and obj["passes"] is True and obj["V_over_U"] is None
     nu = 6.0 * math.sqrt(math.pi) * 90.0 * 135.0 ** -1.5
@@ -139,8 +128,8 @@ def test_estimate_default_json_values(capsys):
             assert k in obj, k
 
 
-def test_estimate_default_json_has_every_fixed_key(capsys):
-    _, out, _ = run(capsys, "estimate", "--json")
+def test_estimate_default_json_has_every_fixed_key(cli):
+    _, out, _ = cli("estimate", "--json")
     obj = strict_json(out)
     assert [k for k in ESTIMATE_KEYS if k not in obj] == []
 
@@ -189,9 +178,9 @@ INVALID = {
 
 
 @pytest.mark.parametrize("name", INVALID)
-def test_invalid_input_exits_2_with_one_line(capsys, name):
+def test_invalid_input_exits_2_with_one_line(cli, name):
     argv, needles = INVALID[name]
-    code, out, err = run(capsys, *argv)
+    code, out, err = cli(*argv)
     assert code == 2
     assert out == ""
     lines = err.strip("\n").splitlines()
@@ -202,28 +191,28 @@ def test_invalid_input_exits_2_with_one_line(capsys, name):
         assert needle in lines[0], (needle, lines[0])
 
 
-def test_invalid_input_with_json_still_exits_2_and_prints_nothing(capsys):
-    code, out, err = run(capsys, "estimate", "--diameter-um", "2", "--json")
+def test_invalid_input_with_json_still_exits_2_and_prints_nothing(cli):
+    code, out, err = cli("estimate", "--diameter-um", "2", "--json")
     assert (code, out, len(err.strip().splitlines())) == (2, "", 1)
 
 
 @pytest.mark.parametrize("argv", [["fahraeus", "--diameter-um", "10"], ["geometry"],
                                   ["estimate", "--nu", "0.6"]])
-def test_missing_parameter_is_not_reported_as_nan(capsys, argv):
-    code, _, err = run(capsys, *argv)
+def test_missing_parameter_is_not_reported_as_nan(cli, argv):
+    code, _, err = cli(*argv)
     assert code == 2
     assert "=nan" not in err
 
 
-def test_too_small_area_names_the_option(capsys):
-    code, _, err = run(capsys, "estimate", "--area-um2", "50")
+def test_too_small_area_names_the_option(cli):
+    code, _, err = cli("estimate", "--area-um2", "50")
     assert code == 2
     assert "area_um2" in err or "--area-um2" in err
 
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")   # fail on the output, not the overflow warning
-def test_tiny_reduced_volume_gives_strict_json_or_exit_2(capsys):
-    code, out, _ = run(capsys, "geometry", "--nu", "1e-300", "--json")
+def test_tiny_reduced_volume_gives_strict_json_or_exit_2(cli):
+    code, out, _ = cli("geometry", "--nu", "1e-300", "--json")
     if code == 0:
         strict_json(out)
     else:
@@ -235,18 +224,18 @@ def test_tiny_reduced_volume_gives_strict_json_or_exit_2(capsys):
 # ------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("law", ["pries1992", "pries1994", "pries2005"])
-def test_viscosity_names_the_pries_law(capsys, law):
-    code, out, _ = run(capsys, "viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--law", law)
+def test_viscosity_names_the_pries_law(cli, law):
+    code, out, _ = cli("viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--law", law)
     assert code == 0 and law in out
-    code, out, _ = run(capsys, "viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--law", law,
+    code, out, _ = cli("viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--law", law,
                        "--json")
     obj = strict_json(out)
     assert obj["law"] == law
     assert obj["eta_rel"] == pytest.approx(relative_viscosity(6.0, 0.45, law), rel=1e-12)
 
 
-def test_viscosity_tube_hematocrit_is_converted_with_fahraeus(capsys):
-    _, out, _ = run(capsys, "viscosity", "--diameter-um", "6", "--hematocrit", "0.3",
+def test_viscosity_tube_hematocrit_is_converted_with_fahraeus(cli):
+    _, out, _ = cli("viscosity", "--diameter-um", "6", "--hematocrit", "0.3",
                     "--hematocrit-kind", "tube", "--json")
     obj = strict_json(out)
     a, b = FAHRAEUS_AB["pries1992"]
@@ -255,12 +244,12 @@ def test_viscosity_tube_hematocrit_is_converted_with_fahraeus(capsys):
     assert obj["eta_rel"] == pytest.approx(relative_viscosity(6.0, obj["discharge_hematocrit"]), rel=1e-12)
 
 
-def test_viscosity_single_file_in_its_range(capsys):
+def test_viscosity_single_file_in_its_range(cli):
     """RBC in a 3 µm tube: Chen et al. single-file law with the estimate's dp+."""
-    code, out, _ = run(capsys, "viscosity", "--diameter-um", "3", "--hematocrit", "0.3",
+    code, out, _ = cli("viscosity", "--diameter-um", "3", "--hematocrit", "0.3",
                        "--hematocrit-kind", "tube", "--law", "single-file")
     assert code == 0 and "single-file" in out
-    _, out, _ = run(capsys, "viscosity", "--diameter-um", "3", "--hematocrit", "0.3",
+    _, out, _ = cli("viscosity", "--diameter-um", "3", "--hematocrit", "0.3",
                     "--hematocrit-kind", "tube", "--law", "single-file", "--json")
     obj = strict_json(out)
     assert "single-file" in obj["law"] and obj["valid"] is True
@@ -270,9 +259,9 @@ def test_viscosity_single_file_in_its_range(capsys):
     assert obj["eta_rel"] == pytest.approx(expected, rel=1e-12)
 
 
-def test_viscosity_single_file_outside_its_range_gives_no_other_law(capsys):
+def test_viscosity_single_file_outside_its_range_gives_no_other_law(cli):
     """6 µm: no valid dp+ for an RBC, so no single-file value (and never Pries's)."""
-    code, out, err = run(capsys, "viscosity", "--diameter-um", "6", "--hematocrit", "0.45",
+    code, out, err = cli("viscosity", "--diameter-um", "6", "--hematocrit", "0.45",
                          "--law", "single-file", "--json")
     obj = strict_json(out)
     assert code == 0
@@ -283,14 +272,14 @@ def test_viscosity_single_file_outside_its_range_gives_no_other_law(capsys):
 
 @pytest.mark.parametrize("constants", ["pries1990", "pries1992"])
 @pytest.mark.parametrize("diameter", ["5", "10", "100"])
-def test_fahraeus_round_trip(capsys, constants, diameter):
-    _, out, _ = run(capsys, "fahraeus", "--diameter-um", diameter, "--discharge-hematocrit", "0.45",
+def test_fahraeus_round_trip(cli, constants, diameter):
+    _, out, _ = cli("fahraeus", "--diameter-um", diameter, "--discharge-hematocrit", "0.45",
                     "--constants", constants, "--json")
     forward = strict_json(out)
     a, b = FAHRAEUS_AB[constants]
     assert forward["tube_hematocrit"] == pytest.approx(ref_fahraeus_tube(float(diameter), 0.45, a, b),
                                                        rel=1e-12)
-    _, out, _ = run(capsys, "fahraeus", "--diameter-um", diameter, "--tube-hematocrit",
+    _, out, _ = cli("fahraeus", "--diameter-um", diameter, "--tube-hematocrit",
                     repr(forward["tube_hematocrit"]), "--constants", constants, "--json")
     back = strict_json(out)
     assert back["discharge_hematocrit"] == pytest.approx(0.45, rel=1e-12, abs=1e-12)
@@ -304,8 +293,8 @@ def _warning_lines(err):
     return [line for line in err.splitlines() if line.startswith("warning:")]
 
 
-def test_out_of_range_viscosity_warns_on_stderr_and_in_json(capsys):
-    code, out, err = run(capsys, "viscosity", "--diameter-um", "2000", "--hematocrit", "0.45", "--json")
+def test_out_of_range_viscosity_warns_on_stderr_and_in_json(cli):
+    code, out, err = cli("viscosity", "--diameter-um", "2000", "--hematocrit", "0.45", "--json")
     assert code == 0
     obj = strict_json(out)
     lines = _warning_lines(err)
@@ -313,7 +302,7 @@ def test_out_of_range_viscosity_warns_on_stderr_and_in_json(capsys):
     assert isinstance(obj["warnings"], list) and obj["warnings"]
     assert [f"warning: {w}" for w in obj["warnings"]] == lines
     assert all("2000" in w for w in obj["warnings"])
-    code, out, err = run(capsys, "viscosity", "--diameter-um", "2000", "--hematocrit", "0.45")
+    code, out, err = cli("viscosity", "--diameter-um", "2000", "--hematocrit", "0.45")
     assert code == 0 and _warning_lines(err) and "warnings" not in out
 
 
@@ -323,8 +312,8 @@ def test_out_of_range_viscosity_warns_on_stderr_and_in_json(capsys):
      "--extrapolate"],
     pytest.param(["viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--law", "single-file"], id="single-file-no-dp"),
 ])
-def test_every_stderr_warning_is_in_the_json(capsys, argv):
-    code, out, err = run(capsys, *argv, "--json")
+def test_every_stderr_warning_is_in_the_json(cli, argv):
+    code, out, err = cli(*argv, "--json")
     assert code == 0
     lines = _warning_lines(err)
     assert lines
@@ -338,9 +327,9 @@ def test_every_stderr_warning_is_in_the_json(capsys, argv):
 @pytest.mark.parametrize("argv", [["estimate", "--diameter-um", "3"],
                                   ["viscosity", "--diameter-um", "6", "--hematocrit", "0.45"]],
                          ids=["estimate", "viscosity"])
-def test_plot_writes_a_png_atomically(capsys, tmp_path, argv):
+def test_plot_writes_a_png_atomically(cli, tmp_path, argv):
     target = tmp_path / "figure.png"
-    code, out, err = run(capsys, *argv, "--plot", str(target), "--json")
+    code, out, err = cli(*argv, "--plot", str(target), "--json")
     assert code == 0, err
     strict_json(out)                       # the figure message goes to stderr, not stdout
     data = target.read_bytes()
@@ -348,10 +337,10 @@ def test_plot_writes_a_png_atomically(capsys, tmp_path, argv):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["figure.png"]
 
 
-def test_plot_file_permissions_follow_the_umask(capsys, tmp_path):
+def test_plot_file_permissions_follow_the_umask(cli, tmp_path):
     old = os.umask(0o022)
     try:
-        run(capsys, "viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--plot",
+        cli("viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--plot",
             str(tmp_path / "eta.png"))
     finally:
         os.umask(old)
@@ -362,8 +351,8 @@ def test_plot_file_permissions_follow_the_umask(capsys, tmp_path):
 # geometry.
 # ------------------------------------------------------------------------------------------
 
-def test_geometry_cell_that_cannot_pass(capsys):
-    code, out, _ = run(capsys, "geometry", "--volume-fl", "90", "--area-um2", "135", "--diameter-um",
+def test_geometry_cell_that_cannot_pass(cli):
+    code, out, _ = cli("geometry", "--volume-fl", "90", "--area-um2", "135", "--diameter-um",
                        "2", "--json")
     obj = strict_json(out)
     assert code == 0
@@ -374,8 +363,8 @@ def test_geometry_cell_that_cannot_pass(capsys):
     assert obj["d_c_um"] == pytest.approx(2.0 * R0 / ref_lam_c(nu), rel=1e-12)
 
 
-def test_geometry_clearance(capsys):
-    code, out, _ = run(capsys, "geometry", "--nu", "0.6", "--lam", "1.9", "--json")
+def test_geometry_clearance(cli):
+    code, out, _ = cli("geometry", "--nu", "0.6", "--lam", "1.9", "--json")
     obj = strict_json(out)
     assert code == 0 and obj["passes"] is True
     lam_c = ref_lam_c(0.6)
@@ -383,6 +372,6 @@ def test_geometry_clearance(capsys):
     assert obj["delta"] == pytest.approx(1.0 - 1.9 / lam_c, rel=1e-12)
 
 
-def test_viscosity_json_names_the_fahraeus_constants_it_used(capsys):
-    _, out, _ = run(capsys, "viscosity", "--diameter-um", "10", "--hematocrit", "0.45", "--json")
+def test_viscosity_json_names_the_fahraeus_constants_it_used(cli):
+    _, out, _ = cli("viscosity", "--diameter-um", "10", "--hematocrit", "0.45", "--json")
     assert strict_json(out)["fahraeus_constants"] == "pries1992"

@@ -31,24 +31,16 @@ def strict_json(text: str) -> dict:
     return obj
 
 
-def run(capsys, *argv):
-    try:
-        code = main(list(argv))
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
-
-def test_sphere_table(capsys):
-    code, out, err = run(capsys, "bem", "sphere", "--lam", "0.5")
+def test_sphere_table(cli):
+    code, out, err = cli("bem", "sphere", "--lam", "0.5")
     assert code == 0, err
     assert "{" not in out and "speed V/U" in out and "dp+ R/(eta U)" in out
     assert "1.68" in out
 
 
-def test_sphere_json(capsys):
-    code, out, err = run(capsys, "bem", "sphere", "--lam", "0.5", "--json")
+def test_sphere_json(cli):
+    code, out, err = cli("bem", "sphere", "--lam", "0.5", "--json")
     assert code == 0, err
     obj = strict_json(out)
     assert obj["command"] == "bem" and obj["subcommand"] == "sphere"
@@ -81,8 +73,8 @@ def test_drop_json_keys_and_files(drop_json):
     assert (d / "shape.png").read_bytes()[:8] == PNG_SIGNATURE
 
 
-def test_drop_json_on_stdout(capsys):
-    code, out, err = run(capsys, "bem", "drop", "--lam", "0.3", "--ca", "0.1", "--modes", "8",
+def test_drop_json_on_stdout(cli):
+    code, out, err = cli("bem", "drop", "--lam", "0.3", "--ca", "0.1", "--modes", "8",
                          "--tol", "1e-3", "--json")
     assert code == 0, err
     obj = strict_json(out)
@@ -93,15 +85,15 @@ def test_drop_json_on_stdout(capsys):
     assert "figure written" not in err
 
 
-def test_drop_table(capsys):
-    code, out, err = run(capsys, "bem", "drop", "--lam", "0.3", "--ca", "0.1", "--modes", "8",
+def test_drop_table(cli):
+    code, out, err = cli("bem", "drop", "--lam", "0.3", "--ca", "0.1", "--modes", "8",
                          "--tol", "1e-3")
     assert code == 0, err
     assert "{" not in out and "speed V/U" in out and "1/R" in out and "converged" in out
 
 
-def test_not_converged_exits_1_with_the_json(capsys):
-    code, out, _ = run(capsys, "bem", "drop", "--lam", "0.5", "--ca", "0.2", "--modes", "8",
+def test_not_converged_exits_1_with_the_json(cli):
+    code, out, _ = cli("bem", "drop", "--lam", "0.5", "--ca", "0.2", "--modes", "8",
                        "--tol", "1e-12", "--json")
     assert code == 1
     obj = strict_json(out)
@@ -125,8 +117,8 @@ def test_not_converged_exits_1_with_the_json(capsys):
      ("residual_tol", "0")),
     (["bem"], ("bem_command",)),
 ])
-def test_invalid_input_exits_2_with_one_line(capsys, argv, needles):
-    code, out, err = run(capsys, *argv)
+def test_invalid_input_exits_2_with_one_line(cli, argv, needles):
+    code, out, err = cli(*argv)
     assert code == 2
     assert out == ""
     lines = err.strip("\n").splitlines()
@@ -152,9 +144,9 @@ def test_estimate_does_not_load_numba_and_stays_fast():
     assert float(elapsed) < 2.0 and time.perf_counter() - t0 < 10
 
 
-def test_sphere_plot_is_written(capsys, tmp_path):
+def test_sphere_plot_is_written(cli, tmp_path):
     path = tmp_path / "sphere.png"
-    code, _, err = run(capsys, "bem", "sphere", "--lam", "0.4", "--plot", str(path))
+    code, _, err = cli("bem", "sphere", "--lam", "0.4", "--plot", str(path))
     assert code == 0
     assert path.read_bytes()[:8] == PNG_SIGNATURE and "figure written" in err
 

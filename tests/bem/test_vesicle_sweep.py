@@ -82,14 +82,6 @@ def fake(monkeypatch):
     return solver
 
 
-def run(capsys, *argv):
-    try:
-        code = main(list(argv))
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
-
 
 # ------------------------------------------------------------------ the cached solves
 def test_cached_solves_are_converged_small_vesicles():
@@ -242,9 +234,9 @@ def test_plot_draws_every_shape_in_the_tube_coloured_by_lam(fake):
 
 
 # ------------------------------------------------------------------ CLI
-def test_cli_json_files_and_plot_exit_0(fake, capsys, tmp_path):
+def test_cli_json_files_and_plot_exit_0(fake, cli, tmp_path):
     png = tmp_path / "sweep.png"
-    code, out, err = run(capsys, "bem", "vesicle-sweep", "--nu", "0.98", "--lam", "0.3", "0.4",
+    code, out, err = cli("bem", "vesicle-sweep", "--nu", "0.98", "--lam", "0.3", "0.4",
                          "3", "--n-modes", "16", "--json", "--out", str(tmp_path / "out"),
                          "--plot", str(png))
     assert code == 0, err
@@ -259,8 +251,8 @@ def test_cli_json_files_and_plot_exit_0(fake, capsys, tmp_path):
     assert "point 1/3" not in err                              # no progress lines with --json
 
 
-def test_cli_table_with_progress_lines_on_stderr(fake, capsys):
-    code, out, err = run(capsys, "bem", "vesicle-sweep", "--nu", "0.98", "--lam-ratio", "0.27",
+def test_cli_table_with_progress_lines_on_stderr(fake, cli):
+    code, out, err = cli("bem", "vesicle-sweep", "--nu", "0.98", "--lam-ratio", "0.27",
                          "0.35", "2")
     assert code == 0, err
     assert "{" not in out and "2/2 points converged" in out and "V/U" in out
@@ -268,9 +260,9 @@ def test_cli_table_with_progress_lines_on_stderr(fake, capsys):
     assert len(progress) == 2 and "point 2/2" in progress[1] and "converged" in progress[1]
 
 
-def test_cli_exits_1_when_a_point_did_not_converge(fake, capsys):
+def test_cli_exits_1_when_a_point_did_not_converge(fake, cli):
     fake.fail_at = (0.35,)
-    code, out, _ = run(capsys, "bem", "vesicle-sweep", "--nu", "0.98", "--lam", "0.3", "0.4",
+    code, out, _ = cli("bem", "vesicle-sweep", "--nu", "0.98", "--lam", "0.3", "0.4",
                        "3", "--json")
     assert code == 1
     obj = json.loads(out)
@@ -279,7 +271,7 @@ def test_cli_exits_1_when_a_point_did_not_converge(fake, capsys):
     assert "fake failure" in obj["points"][1]["message"]
 
 
-def test_cli_interrupted_sweep_keeps_the_finished_points(fake, capsys, tmp_path, monkeypatch):
+def test_cli_interrupted_sweep_keeps_the_finished_points(fake, cli, tmp_path, monkeypatch):
     def stop_at_third(*args, **kwargs):
         if len(fake.calls) == 2:
             raise KeyboardInterrupt
@@ -304,8 +296,8 @@ def test_cli_interrupted_sweep_keeps_the_finished_points(fake, capsys, tmp_path,
     ([], ("--lam",)),
     (["--lam", "0.3", "0.4", "3", "--ca-b", "0"], ("ca_b", "0")),
 ])
-def test_cli_invalid_input_exits_2_with_one_line(fake, capsys, argv, needles):
-    code, out, err = run(capsys, "bem", "vesicle-sweep", "--nu", "0.98", *argv)
+def test_cli_invalid_input_exits_2_with_one_line(fake, cli, argv, needles):
+    code, out, err = cli("bem", "vesicle-sweep", "--nu", "0.98", *argv)
     assert code == 2
     assert out == ""
     lines = err.strip("\n").splitlines()
@@ -316,8 +308,8 @@ def test_cli_invalid_input_exits_2_with_one_line(fake, capsys, argv, needles):
     assert fake.calls == []
 
 
-def test_cli_nu_out_of_range_exits_2(fake, capsys):
-    code, out, err = run(capsys, "bem", "vesicle-sweep", "--nu", "1.0", "--lam", "0.3", "0.4", "2")
+def test_cli_nu_out_of_range_exits_2(fake, cli):
+    code, out, err = cli("bem", "vesicle-sweep", "--nu", "1.0", "--lam", "0.3", "0.4", "2")
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "nu=1" in err
     assert fake.calls == []
 
