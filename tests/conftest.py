@@ -29,3 +29,18 @@ def cli(capsys):
         out, err = capsys.readouterr()
         return code, out, err
     return run
+
+
+@pytest.fixture
+def cli_usage_error(cli):
+    """``cli_usage_error(*argv) -> line``: asserts the CLI contract for invalid input (exit 2,
+    nothing on stdout, one "error" line on stderr, no traceback) and returns that line."""
+    def run(*argv):
+        code, out, err = cli(*argv)
+        assert code == 2
+        assert out == ""
+        lines = err.strip("\n").splitlines()
+        assert len(lines) == 1, err
+        assert "Traceback" not in err and "error" in lines[0]
+        return lines[0]
+    return run
