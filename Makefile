@@ -25,6 +25,7 @@ validation: $(BIN)/vesicle-tube
 
 benchmark: $(BIN)/vesicle-tube
 	$(BIN)/python tests/benchmarks/run_benchmarks.py
+	$(BIN)/python tests/benchmarks/bench_vesicle.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info
