@@ -123,6 +123,26 @@ def test_continuation_rungs_halve_the_distance_to_lam_c():
     assert _rungs(0.99) == [0.9, 0.95, 0.975, 0.9875]
 
 
+def test_self_intersection_and_wall_contact_are_detected():
+    """The checks behind "the membrane self-intersects" and "touching the wall (closing
+    film)": a figure-eight meridian crosses itself, a half circle does not; a membrane of
+    radius R is rejected before any BEM work."""
+    from bem.drop import DropDiscretisation
+    from bem.shape import SpectralCurve
+    from bem.vesicle import VesicleOperator, _self_intersects
+    th = np.linspace(0.0, math.pi, 201)
+    assert not _self_intersects(-np.cos(th), np.sin(th))
+    # up the diagonal from the rear pole (-1, 0) to (1, 0.5), back along r = 0.2 to x = -0.5,
+    # down to the axis: the return leg crosses the diagonal at x = -0.2
+    x = np.concatenate([np.linspace(-1, 1, 50), np.linspace(1, -0.5, 50), [-0.5]])
+    r = np.concatenate([np.linspace(0, 0.5, 50), np.full(50, 0.2), [0.0]])
+    assert _self_intersects(x, r)
+    touching = SpectralCurve.sphere(1.0, 8)
+    op = VesicleOperator(0.99, 1.0, 50.0, DropDiscretisation(n_modes=8, n_panels=8), touching)
+    with pytest.raises(InvalidParameterError, match="touching the wall"):
+        op.evaluate(touching)
+
+
 # ------------------------------------------------------------------ validation (slow)
 @pytest.mark.slow
 def test_small_vesicle_moves_like_a_sphere():
