@@ -313,7 +313,7 @@ def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, m
 
     rep = levenberg_marquardt(fun, op.free(template), tol=xtol, max_iter=max_iter,
                               max_jacobians=3 if seed_level else 8,
-                              stall=0.9 if seed_level else None)
+                              stall=0.9 if seed_level else None, floor_ratio=0.99)
     if rep.payload is None:
         raise InvalidParameterError("initial", "a shape rejected by the operator", rep.message)
     state = rep.payload
