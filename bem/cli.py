@@ -123,6 +123,8 @@ def cmd_bem_vesicle(args):
             ("smallest gap h/R", res.film_min, "-", method, ""),
             ("largest tension gamma_max/(eta U)", res.tension_max, "-", method,
              pm("tension_max")),
+            ("largest wall shear stress tau_w R/(eta U) = shear rate R/U", res.wall_shear_max,
+             "-", method, "Poiseuille: 4"),
             ("rear / front curvature (neg. convex)",
              f"{res.curvature_rear:.4g} / {res.curvature_front:.4g}", "1/R", method, ""),
             ("shape class", res.shape_class, "", method, ""),

@@ -285,6 +285,12 @@ class VesicleResult:
         Length L/R and smallest gap 1 − max r [R].
     tension_max, tension_rear, tension_front : float
         Largest tension and its pole values [ηU].
+    wall_shear_max : float
+        Largest shear stress on the tube wall [ηU/R], equal to the largest wall shear rate
+        [U/R] (η = 1); Poiseuille flow alone gives 4.
+    wall_x, wall_shear : ndarray
+        Wall shear stress profile τ_w(x) at the wall nodes (x from the rear pole, as ``x``)
+        [R, ηU/R] (:meth:`bem.vesicle.VesicleOperator.wall_shear`).
     curvature_rear, curvature_front : float
         Principal curvature at the poles in the convention of
         :class:`lubrication.results.LubricationResult` (negative where convex) [1/R].
@@ -318,6 +324,7 @@ class VesicleResult:
     ell: float = math.nan
     film_min: float = math.nan
     tension_max: float = math.nan
+    wall_shear_max: float = math.nan
     tension_rear: float = math.nan
     tension_front: float = math.nan
     curvature_rear: float = math.nan
@@ -343,6 +350,8 @@ class VesicleResult:
     modes: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
     density: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
     tension_modes: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    wall_x: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
+    wall_shear: np.ndarray = field(default_factory=lambda: np.empty(0), repr=False)
     provenance: dict = field(default_factory=provenance, repr=False)
 
     @property
@@ -367,7 +376,8 @@ class VesicleResult:
                                     density=self.density)
 
     _SCALARS = ("nu", "lam", "lam_c", "ca_b", "success", "message", "V_over_U", "dp_plus_R0",
-                "dp_plus_R", "ell", "film_min", "tension_max", "tension_rear", "tension_front",
+                "dp_plus_R", "ell", "film_min", "tension_max", "wall_shear_max",
+                "tension_rear", "tension_front",
                 "curvature_rear", "curvature_front", "shape_class", "error_estimate",
                 "volume_error", "area_error", "residual", "tol", "residual_tol", "panels",
                 "refinement", "seed", "iterations", "timings", "provenance")
@@ -383,7 +393,8 @@ class VesicleResult:
         out["bie_solves"] = self.bie_solves
         if shape:
             out["shape"] = {k: _clean(getattr(self, k)) for k in
-                            ("x", "r", "tension", "modes", "density", "tension_modes")}
+                            ("x", "r", "tension", "modes", "density", "tension_modes",
+                             "wall_x", "wall_shear")}
         return out
 
     def save(self, directory, stem: str | None = None) -> tuple[Path, Path]:

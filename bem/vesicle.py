@@ -169,6 +169,21 @@ class VesicleOperator(DropOperator):
         lab frame) :math:`u = u_0 + U g` for tension :math:`\gamma = \sum_k g_k\cos(k\pi\tau)`,
         and Δp⁺R/(ηU) :math:`= dp_0 + dp\cdot g` (reciprocal theorem, as for the drop).
         """
+        return self._columns(curve)[:5]
+
+    def wall_shear(self, curve: SpectralCurve, g) -> tuple[np.ndarray, np.ndarray]:
+        r"""Shear stress of the fluid on the tube wall, :math:`\tau_w(x)` [ηU/R], at the wall
+        nodes (x, tau_w): the Poiseuille value 4 minus the axial wall density of the disturbance
+        (the force per area the wall exerts on the fluid, :mod:`bem.assembly`). Force balance
+        on the fluid in the tube (the membrane load has zero resultant):
+        :math:`\int(\tau_w - 4)\,2\pi R\,dx = \pi R^2\Delta p^+`. The wall shear rate is
+        :math:`\tau_w/\eta` [U/R]."""
+        qw = self._columns(curve)[5]
+        q = qw[:, 0] + qw[:, 1:] @ np.asarray(g, dtype=float)
+        return self.wall.x.ravel(), 4.0 - q[0::2]
+
+    def _columns(self, curve: SpectralCurve):
+        """velocity_columns plus the wall density columns (2 n_wall, M + 1)."""
         tol = self.disc.quad_tol
         drop = self.panels(curve)
         if np.max(drop.r) >= 1.0 - 1e-6:
@@ -195,7 +210,7 @@ class VesicleOperator(DropOperator):
         Uc = AQ[: 2 * nd] + (B @ qw) / _EIGHT_PI + np.outer(col_dp, dp)
         u0 = Uc[:, 0].copy()
         u0[0::2] += poiseuille(rb)
-        return drop, u0, Uc[:, 1:], float(dp[0]), dp[1:]
+        return drop, u0, Uc[:, 1:], float(dp[0]), dp[1:], qw
 
     def evaluate(self, curve: SpectralCurve) -> dict:
         """Flow of the membrane ``curve``: the least-squares tension and V, the residual."""
@@ -574,6 +589,11 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                + f", residual {fine['residual']:.1e}")
     if not success:
         log.warning("solve_vesicle(nu=%g, lam=%g): %s", nu, lam, message)
+    try:
+        wall_x, wall_shear = op.wall_shear(curve, st["g"])
+        wall_x = wall_x - curve.position(np.array([0.0]))[0][0]    # from the rear pole
+    except InvalidParameterError:                     # a shape touching the wall
+        wall_x = wall_shear = np.empty(0)
     k_rear = curve.curvatures(np.array([0.0]))[0][0]
     k_front = curve.curvatures(np.array([1.0]))[0][0]
     parachute = bool(k_rear < 0.0 or np.min(prof["x"]) < prof["x"][0] - 1e-12)
@@ -583,6 +603,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=success, message=message,
         V_over_U=fine["V_over_U"], dp_plus_R0=fine["dp_plus_R0"], dp_plus_R=fine["dp_plus_R"],
         ell=fine["ell"], film_min=fine["film_min"], tension_max=fine["tension_max"],
+        wall_shear_max=float(np.max(wall_shear)) if wall_shear.size else math.nan,
+        wall_x=wall_x, wall_shear=wall_shear,
         tension_rear=float(prof["tension"][0]), tension_front=float(prof["tension"][-1]),
         curvature_rear=-float(k_rear), curvature_front=-float(k_front),
         shape_class="parachute" if parachute else "bullet", error_estimate=err,

@@ -76,6 +76,24 @@ def test_coarse_solution_conserves_volume_and_area_and_is_near_the_reference(coa
     assert drop == pytest.approx(res.tension_front - res.tension_rear, rel=1e-3)
 
 
+def test_wall_shear_balances_the_extra_pressure_drop(coarse):
+    """Force balance on the fluid in the tube: the extra wall shear integrates to the extra
+    pressure force, int (tau_w - 4) 2 pi R dx = pi R^2 dp+ (dp+ here from the reciprocal
+    theorem on the membrane load, an independent route). Measured at (0.9, 1.0), 16 modes:
+    ratio 1 - 4e-13; tau_w peaks at 7.32 eta U/R beside the vesicle (Poiseuille: 4; the film
+    h = 0.183 sheared at V/h = 6.87)."""
+    from bem.vesicle_dynamics import vesicle_operator
+    op = vesicle_operator(coarse)
+    x, tw = op.wall_shear(coarse.curve(), coarse.tension_modes)
+    extra = np.sum((tw - 4.0) * 2 * math.pi * op.wall.w.ravel())
+    assert extra == pytest.approx(math.pi * coarse.dp_plus_R, rel=1e-8)
+    assert coarse.wall_shear_max == pytest.approx(np.max(tw), rel=1e-3)   # other wall mesh
+    assert 4.0 < coarse.wall_shear_max < 4.0 + 2 * coarse.V_over_U / coarse.film_min
+    assert abs(tw[0] - 4.0) < 1e-6 and abs(tw[-1] - 4.0) < 1e-6      # Poiseuille far away
+    peak = coarse.wall_x[np.argmax(coarse.wall_shear)]
+    assert 0.0 < peak < coarse.ell                                    # beside the vesicle
+
+
 def test_result_dict_and_atomic_save(coarse, tmp_path):
     d = coarse.to_dict()
     for key in ("nu", "lam", "lam_c", "V_over_U", "dp_plus_R0", "ell", "film_min",
