@@ -56,6 +56,7 @@ SWEEP_COLUMNS = (
     ("ell", "length L/R [-]"),
     ("film_min", "smallest gap 1 - max r/R [-]"),
     ("tension_max", "largest membrane tension gamma_max/(eta U) [-]"),
+    ("wall_shear_max", "largest wall shear stress tau_w R/(eta U) = shear rate R/U [-]"),
     ("shape_class", "bullet or parachute"),
     ("converged", "the solver's success flag"),
     ("residual", "steady residual max|u - V e_x| [U]"),

@@ -35,7 +35,7 @@ LAM_C = 1.1259300042085487        # root of 2x^3 - 3 nu^(-2/3) x^2 + 1 for nu = 
 
 #: The columns the sweep CSV must have, in this order (issue 6), before the message.
 CSV_COLUMNS = ["nu", "lam", "lam_c", "lam_ratio", "ca_b", "V_over_U", "dp_plus_R0", "ell",
-               "film_min", "tension_max", "shape_class", "converged", "residual", "volume_error",
+               "film_min", "tension_max", "wall_shear_max", "shape_class", "converged", "residual", "volume_error",
                "area_error", "runtime"]
 _ARRAYS = {f.name for f in dataclasses.fields(VesicleResult) if f.repr is False} - {"provenance"}
 
