@@ -197,8 +197,28 @@ def cmd_bem_vesicle_sweep(args):
     return out, format_rows(rows, title)
 
 
-def _refinement_options(p) -> None:
-    """--residual-tol and --max-modes of the vesicle commands."""
+def _vesicle_options(p, sweep: bool) -> None:
+    """Inputs and refinement options of ``bem vesicle`` (one lam) and ``vesicle-sweep``
+    (``--lam A B N``)."""
+    p.add_argument("--nu", type=float, required=True, help="reduced volume, 0 < nu < 1 [-]")
+    g = p.add_mutually_exclusive_group(required=True)
+    if sweep:
+        g.add_argument("--lam", type=float, nargs=3, metavar=("A", "B", "N"),
+                       help="N confinements R0/R from A to B, each 0 < lam < lam_c(nu) [-]")
+        g.add_argument("--lam-ratio", type=float, nargs=3, metavar=("A", "B", "N"),
+                       dest="lam_ratio",
+                       help="N values of lam/lam_c from A to B, each 0 < ratio < 1 [-]")
+    else:
+        g.add_argument("--lam", type=float, help="confinement R0/R, 0 < lam < lam_c(nu) [-]")
+        g.add_argument("--lam-ratio", type=float, dest="lam_ratio",
+                       help="confinement over critical lam/lam_c, 0 < ratio < 1 [-]")
+    p.add_argument("--ca-b", type=float, default=50.0, dest="ca_b",
+                   help="bending capillary number eta U R0^2/kappa (default 50) [-]")
+    p.add_argument("--n-modes", "--modes", type=int, dest="modes",
+                   help="shape modes of the fine mesh (default: automatic refinement)")
+    p.add_argument("--tol", type=float, default=1e-4,
+                   help="relative tolerance of the refinement pair in V/U, dp+ and "
+                        "gamma_max (default 1e-4) [-]")
     p.add_argument("--residual-tol", type=float, default=1e-4, dest="residual_tol",
                    help="tolerance of the steady residual max|u - V e_x| (default 1e-4) [U]")
     p.add_argument("--max-modes", type=int, default=40, dest="max_modes",
@@ -240,19 +260,7 @@ def add_bem_parser(subparsers) -> None:
 
     v = sub.add_parser("vesicle", help="steady vesicle (inextensible bending membrane, "
                                        "viscosity ratio 1) in Poiseuille flow")
-    v.add_argument("--nu", type=float, required=True, help="reduced volume, 0 < nu < 1 [-]")
-    g = v.add_mutually_exclusive_group(required=True)
-    g.add_argument("--lam", type=float, help="confinement R0/R, 0 < lam < lam_c(nu) [-]")
-    g.add_argument("--lam-ratio", type=float, dest="lam_ratio",
-                   help="confinement over critical lam/lam_c, 0 < ratio < 1 [-]")
-    v.add_argument("--ca-b", type=float, default=50.0, dest="ca_b",
-                   help="bending capillary number eta U R0^2/kappa (default 50) [-]")
-    v.add_argument("--modes", type=int,
-                   help="shape modes of the fine mesh (default: automatic refinement)")
-    v.add_argument("--tol", type=float, default=1e-4,
-                   help="relative tolerance of the refinement pair in V/U, dp+ and "
-                        "gamma_max (default 1e-4) [-]")
-    _refinement_options(v)
+    _vesicle_options(v, sweep=False)
     v.add_argument("--out", metavar="DIR", help="save the result as JSON + CSV profiles in DIR")
     v.add_argument("--plot", metavar="FILE", help="write the vesicle shape to FILE (PNG)")
     v.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -260,20 +268,7 @@ def add_bem_parser(subparsers) -> None:
 
     w = sub.add_parser("vesicle-sweep", help="steady vesicles over a range of confinements "
                                              "(continuation in lam, minutes per point)")
-    w.add_argument("--nu", type=float, required=True, help="reduced volume, 0 < nu < 1 [-]")
-    g = w.add_mutually_exclusive_group(required=True)
-    g.add_argument("--lam", type=float, nargs=3, metavar=("A", "B", "N"),
-                   help="N confinements R0/R from A to B, each 0 < lam < lam_c(nu) [-]")
-    g.add_argument("--lam-ratio", type=float, nargs=3, metavar=("A", "B", "N"), dest="lam_ratio",
-                   help="N values of lam/lam_c from A to B, each 0 < ratio < 1 [-]")
-    w.add_argument("--ca-b", type=float, default=50.0, dest="ca_b",
-                   help="bending capillary number eta U R0^2/kappa (default 50) [-]")
-    w.add_argument("--n-modes", "--modes", type=int, dest="modes",
-                   help="shape modes of the fine mesh (default: automatic refinement)")
-    w.add_argument("--tol", type=float, default=1e-4,
-                   help="relative tolerance of the refinement pair in V/U, dp+ and "
-                        "gamma_max (default 1e-4) [-]")
-    _refinement_options(w)
+    _vesicle_options(w, sweep=True)
     w.add_argument("--out", metavar="DIR", help="write the sweep CSV + JSON and each point's "
                                                 "JSON + CSV profiles to DIR (atomic)")
     w.add_argument("--plot", metavar="FILE", help="write the shapes of all points in the tube "

@@ -9,7 +9,6 @@ installed console script.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import re
@@ -20,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_helpers import strict_json
 
 from correlations.viscosity import relative_viscosity
 
@@ -28,17 +28,6 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 ESTIMATE_KEYS = ("nu", "lam", "lam_c", "ell_c", "delta", "V_over_U", "dp_plus_R0", "dp_plus_R",
                  "eta_rel", "tube_hematocrit", "discharge_hematocrit", "d_c_um", "L_c_um", "R0_um",
                  "passes")
-
-
-def _reject_constant(name):
-    raise ValueError(f"not strict JSON: {name}")
-
-
-def strict_json(text: str) -> dict:
-    """Parse stdout as exactly one JSON object (no NaN/Infinity, nothing before or after)."""
-    obj = json.loads(text, parse_constant=_reject_constant)
-    assert isinstance(obj, dict)
-    return obj
 
 
 def ref_lam_c(nu):

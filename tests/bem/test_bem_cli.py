@@ -14,22 +14,12 @@ import time
 from pathlib import Path
 
 import pytest
+from cli_helpers import strict_json
 
 from correlations.cli import main
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def _reject_constant(name):
-    raise ValueError(f"not strict JSON: {name}")
-
-
-def strict_json(text: str) -> dict:
-    obj = json.loads(text, parse_constant=_reject_constant)
-    assert isinstance(obj, dict)
-    return obj
-
 
 
 def test_sphere_table(cli):
