@@ -202,16 +202,12 @@ def _vesicle_options(p, sweep: bool) -> None:
     (``--lam A B N``)."""
     p.add_argument("--nu", type=float, required=True, help="reduced volume, 0 < nu < 1 [-]")
     g = p.add_mutually_exclusive_group(required=True)
-    if sweep:
-        g.add_argument("--lam", type=float, nargs=3, metavar=("A", "B", "N"),
-                       help="N confinements R0/R from A to B, each 0 < lam < lam_c(nu) [-]")
-        g.add_argument("--lam-ratio", type=float, nargs=3, metavar=("A", "B", "N"),
-                       dest="lam_ratio",
-                       help="N values of lam/lam_c from A to B, each 0 < ratio < 1 [-]")
-    else:
-        g.add_argument("--lam", type=float, help="confinement R0/R, 0 < lam < lam_c(nu) [-]")
-        g.add_argument("--lam-ratio", type=float, dest="lam_ratio",
-                       help="confinement over critical lam/lam_c, 0 < ratio < 1 [-]")
+    many = {"nargs": 3, "metavar": ("A", "B", "N")} if sweep else {}
+    points = "N values from A to B of the " if sweep else ""
+    g.add_argument("--lam", type=float, **many,
+                   help=points + "confinement R0/R, 0 < lam < lam_c(nu) [-]")
+    g.add_argument("--lam-ratio", type=float, dest="lam_ratio", **many,
+                   help=points + "confinement over critical lam/lam_c, 0 < ratio < 1 [-]")
     p.add_argument("--ca-b", type=float, default=50.0, dest="ca_b",
                    help="bending capillary number eta U R0^2/kappa (default 50) [-]")
     p.add_argument("--n-modes", "--modes", type=int, dest="modes",
