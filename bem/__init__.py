@@ -5,13 +5,16 @@ matrix), :mod:`bem.quadrature` (panels, singular and near-singular rules), :mod:
 (generating curves and meshes), :mod:`bem.shape` (spectral tangent-angle curves with exact
 curvatures), :mod:`bem.assembly` (bordered single-layer system), :mod:`bem.solve` (rigid
 sphere), :mod:`bem.drop` (clean drop: direct Newton steady state, time relaxation),
-:mod:`bem.membrane` (bending and tension forces), :mod:`bem.vesicle` (steady vesicle),
-:mod:`bem.sweep` (vesicle sweeps over the confinement by continuation),
+:mod:`bem.membrane` (bending and tension forces), :mod:`bem.newton` (Levenberg–Marquardt with
+Broyden updates, shared by drop and vesicle), :mod:`bem.vesicle` (steady vesicle),
+:mod:`bem.vesicle_dynamics` (time integration of a vesicle), :mod:`bem.sweep` (vesicle sweeps
+over the confinement by continuation),
 :mod:`bem.results` (result dataclasses), :mod:`bem.plotting`, :mod:`bem.cli`. Units:
 R = eta = U = 1.
 
-Public entry points: :func:`bem.solve.solve_sphere`, :func:`bem.solve.sphere_drag` and
-:func:`bem.drop.solve_drop`.
+Public entry points: :func:`bem.solve.solve_sphere`, :func:`bem.solve.sphere_drag`,
+:func:`bem.drop.solve_drop`, :func:`bem.vesicle.solve_vesicle`, :func:`bem.sweep.sweep_vesicle`
+and :func:`bem.vesicle_dynamics.relax_vesicle`.
 """
 
 __all__ = ["DropResult", "SphereResult", "VesicleResult", "solve_drop", "solve_sphere",
