@@ -210,6 +210,24 @@ class DropOperator:
         return SpectralCurve.closed(modes, volume=self.volume, centroid=0.0,
                                     density=self.density)
 
+    def _dependent(self) -> list[int]:
+        """Modes fixed by the constraints of :meth:`curve` (c_1 closes the curve)."""
+        return [0]
+
+    def free(self, modes) -> np.ndarray:
+        """The shape unknowns: the modes without the dependent ones."""
+        keep = np.ones(len(modes), dtype=bool)
+        keep[self._dependent()] = False
+        return np.asarray(modes, dtype=float)[keep]
+
+    def full(self, z, template) -> np.ndarray:
+        """``template`` with its free modes replaced by ``z`` (inverse of :meth:`free`)."""
+        m = np.array(template, dtype=float)
+        keep = np.ones(m.size, dtype=bool)
+        keep[self._dependent()] = False
+        m[keep] = z
+        return m
+
     def state(self, curve: SpectralCurve) -> DropState:
         """Velocity of the interface of ``curve`` (one BEM evaluation)."""
         tol = self.disc.quad_tol
@@ -284,17 +302,16 @@ def newton_drop(op: DropOperator, modes0, V0: float | None = None, *, tol: float
     V0 = state.V_fit if V0 is None else float(V0)
 
     def fun(z):
-        m = modes.copy()
-        m[1:] = z[:-1]
-        st = op.state(op.curve(m))
+        st = op.state(op.curve(op.full(z[:-1], modes)))
         return np.sqrt(st.weights) * st.residual(z[-1]), st
 
     def v_column(st):
         return {modes.size - 1: -np.sqrt(st.weights) * st.panels.nx.ravel()}
 
-    rep = levenberg_marquardt(fun, np.concatenate([modes[1:], [V0]]), tol=tol,
+    rep = levenberg_marquardt(fun, np.concatenate([op.free(modes), [V0]]), tol=tol,
                               max_iter=max_iter, fd_step=fd_step, max_jacobians=max_jacobians,
-                              exact_columns=v_column)
+                              exact_columns=v_column,
+                              start=(np.sqrt(state.weights) * state.residual(V0), state))
     st = rep.payload
     return NewtonReport(rep.success, rep.message, st, float(rep.z[-1]),
                         st.curve.modes.copy() if st is not None else modes, rep.iterations,
@@ -303,18 +320,19 @@ def newton_drop(op: DropOperator, modes0, V0: float | None = None, *, tol: float
 
 # -------------------------------------------------------------------------------- relaxation
 def _shape_velocity_matrix(op: DropOperator, modes: np.ndarray, h: float = 1e-7) -> np.ndarray:
-    """d(X.n)/d c_j at the drop nodes for the free modes c_2..c_N (geometry only, no BEM)."""
+    """d(X.n)/dz at the nodes for the free modes z = op.free(modes) (geometry only, no BEM;
+    the dependent modes follow through ``op.curve``)."""
     base = op.curve(modes)
-    p0 = op.panels(base)
-    x0, r0 = p0.x.ravel(), p0.r.ravel()
-    nx, nr = p0.nx.ravel(), p0.nr.ravel()
-    G = np.empty((x0.size, modes.size - 1))
-    for j in range(1, modes.size):
-        m2 = modes.copy()
-        m2[j] += h
-        c2 = op.curve(m2)
-        x2, r2 = c2.position(op.tau)
-        G[:, j - 1] = ((x2.ravel() - x0) * nx + (r2.ravel() - r0) * nr) / h
+    x0, r0 = base.position(op.tau)
+    nx, nr = base.normal(op.tau)
+    x0, r0, nx, nr = (a.ravel() for a in (x0, r0, nx, nr))
+    z = op.free(base.modes)
+    G = np.empty((x0.size, z.size))
+    for j in range(z.size):
+        z2 = z.copy()
+        z2[j] += h
+        x2, r2 = op.curve(op.full(z2, base.modes)).position(op.tau)
+        G[:, j] = ((x2.ravel() - x0) * nx + (r2.ravel() - r0) * nr) / h
     return G
 
 

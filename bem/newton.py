@@ -73,7 +73,7 @@ def _fd_jacobian(fun, z, F, fd_step, exact):
 def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
                         fd_step: float = 1e-7, max_jacobians: int = 8,
                         exact_columns=None, stall: float | None = None,
-                        floor_ratio: float | None = None) -> LMReport:
+                        floor_ratio: float | None = None, start=None) -> LMReport:
     """Minimise |F(z)| (see the module docstring).
 
     ``fun(z)`` returns (F, payload) and raises InvalidParameterError for an invalid shape;
@@ -85,14 +85,18 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
     a step with a fresh Jacobian that reduces |F| by less than this ratio whatever its size, or a
     spent Jacobian budget after |F| fell less than 10 % over three steps (ill-conditioned
     problems with flat directions: the vesicle near lam_c). Without it a stall is a failure
-    (the drop: a stall there means no steady shape).
+    (the drop: a stall there means no steady shape). ``start``: (F, payload) at ``z0`` if the
+    caller has already evaluated it (saves one evaluation).
     """
     z = np.array(z0, dtype=float)
-    try:
-        F, payload = fun(z)
-    except InvalidParameterError as exc:
-        return LMReport(False, f"initial shape rejected: {exc}", z, None, None, 0, 1, 0)
-    n_eval = 1
+    if start is not None:
+        (F, payload), n_eval = start, 0
+    else:
+        try:
+            F, payload = fun(z)
+        except InvalidParameterError as exc:
+            return LMReport(False, f"initial shape rejected: {exc}", z, None, None, 0, 1, 0)
+        n_eval = 1
 
     def exact(pl):
         return exact_columns(pl) if exact_columns is not None else {}

@@ -149,18 +149,9 @@ class VesicleOperator(DropOperator):
                                         "a shape near the vesicle's area")
         return self._raw_curve(m)
 
-    def free(self, modes) -> np.ndarray:
-        """The nonlinear unknowns: modes without c_1 and the area mode."""
-        keep = np.ones(len(modes), dtype=bool)
-        keep[[0, self.area_mode]] = False
-        return np.asarray(modes, dtype=float)[keep]
-
-    def full(self, z, template) -> np.ndarray:
-        m = np.array(template, dtype=float)
-        keep = np.ones(m.size, dtype=bool)
-        keep[[0, self.area_mode]] = False
-        m[keep] = z
-        return m
+    def _dependent(self) -> list[int]:
+        """c_1 closes the curve, the area mode gives the area."""
+        return [0, self.area_mode]
 
     def velocity_columns(self, curve: SpectralCurve):
         r"""Membrane velocity as an affine function of the tension coefficients (one BEM solve).

@@ -71,6 +71,7 @@ from lubrication.checks import (
 )
 
 from .assembly import poiseuille
+from .drop import _shape_velocity_matrix
 from .membrane import tension_profile
 from .quadrature import PanelSet, barycentric_weights, gauss_legendre
 from .shape import SpectralCurve
@@ -187,23 +188,6 @@ class VesicleFlow:
 
     def max_residual(self) -> float:
         return float(np.max(np.abs(self.residual())))
-
-
-def _shape_velocity_matrix(op, modes: np.ndarray, h: float = 1e-7) -> np.ndarray:
-    """d(X.n)/dz at the nodes for the free modes z = op.free(modes) (geometry only, no BEM;
-    the closing mode and the area mode follow through ``op.curve``)."""
-    base = op.curve(modes)
-    x0, r0 = base.position(op.tau)
-    nx, nr = base.normal(op.tau)
-    x0, r0, nx, nr = (a.ravel() for a in (x0, r0, nx, nr))
-    z = op.free(base.modes)
-    G = np.empty((x0.size, z.size))
-    for j in range(z.size):
-        z2 = z.copy()
-        z2[j] += h
-        x2, r2 = op.curve(op.full(z2, base.modes)).position(op.tau)
-        G[:, j] = ((x2.ravel() - x0) * nx + (r2.ravel() - r0) * nr) / h
-    return G
 
 
 def vesicle_flow(op, curve: SpectralCurve, G: np.ndarray | None = None) -> VesicleFlow:
