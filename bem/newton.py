@@ -27,7 +27,7 @@ import numpy as np
 
 from lubrication.checks import InvalidParameterError
 
-__all__ = ["LMReport", "levenberg_marquardt"]
+__all__ = ["LMReport", "difference_jacobian", "levenberg_marquardt"]
 
 log = logging.getLogger(__name__)
 
@@ -47,7 +47,7 @@ class LMReport:
     history: list = field(default_factory=list)
 
 
-def _fd_jacobian(fun, z, F, fd_step, exact):
+def difference_jacobian(fun, z, F, fd_step, exact):
     """Forward-difference Jacobian; columns in ``exact`` (index -> column) are not differenced;
     a step that makes the shape invalid is taken backwards."""
     J = np.empty((F.size, z.size))
@@ -103,7 +103,7 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
 
     norm = float(np.linalg.norm(F))
     history = [norm]
-    J, n = _fd_jacobian(fun, z, F, fd_step, exact(payload))
+    J, n = difference_jacobian(fun, z, F, fd_step, exact(payload))
     n_eval += n
     n_jac, fresh = 1, True
     mu = 1e-8
@@ -132,7 +132,7 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
             mu = max(10.0 * mu, 1e-4)
         if not accepted:
             if not fresh and n_jac < max_jacobians:
-                J, n = _fd_jacobian(fun, z, F, fd_step, exact(payload))
+                J, n = difference_jacobian(fun, z, F, fd_step, exact(payload))
                 n_eval += n
                 n_jac, fresh = n_jac + 1, True
                 continue
@@ -178,7 +178,7 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
             message = f"converged to the residual floor: relative step {step:.1e}"
             break
         if ratio > 0.5 and n_jac < max_jacobians:
-            J, n = _fd_jacobian(fun, z, F, fd_step, exact(payload))
+            J, n = difference_jacobian(fun, z, F, fd_step, exact(payload))
             n_eval += n
             n_jac, fresh = n_jac + 1, True
     else:

@@ -73,6 +73,7 @@ from lubrication.checks import (
 from .assembly import poiseuille
 from .drop import _shape_velocity_matrix
 from .membrane import tension_profile
+from .newton import difference_jacobian
 from .quadrature import PanelSet, barycentric_weights, gauss_legendre
 from .shape import SpectralCurve
 
@@ -238,20 +239,10 @@ def _fd_jacobian(op, z, template, base: VesicleFlow, fd_step):
     The projection matrix G is held at the base shape: this drops the term (dG⁺/dz)(u·n − V n_x),
     which vanishes at a steady state and is smooth (geometry only), and saves the N - 2 shape
     perturbations of each G; the stiff bending response is differenced in full."""
-    f0 = base.rate
-    J = np.empty((z.size, z.size))
-    for j in range(z.size):
-        h = fd_step * max(1.0, abs(z[j]))
-        z2 = z.copy()
-        z2[j] += h
-        try:
-            f2 = vesicle_flow(op, op.curve(op.full(z2, template)), base.G).rate
-        except InvalidParameterError:                  # perturbed shape invalid: go the other way
-            h = -h
-            z2[j] = z[j] + h
-            f2 = vesicle_flow(op, op.curve(op.full(z2, template)), base.G).rate
-        J[:, j] = (f2 - f0) / h
-    return J
+    def rate(z2):
+        return vesicle_flow(op, op.curve(op.full(z2, template)), base.G).rate, None
+
+    return difference_jacobian(rate, z, base.rate, fd_step, {})[0]
 
 
 def relaxation_rate_brochard_lennon_1975(q, kappa: float, gamma: float):
