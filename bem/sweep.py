@@ -36,8 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lubrication.checks import InvalidParameterError, as_finite, check_positive
-from lubrication.geometry import resolve_confinement
+from lubrication.checks import InvalidParameterError, as_finite
 from lubrication.io import atomic_write
 
 __all__ = ["SWEEP_COLUMNS", "save_sweep", "sweep_table", "sweep_vesicle"]
@@ -70,8 +69,11 @@ SWEEP_COLUMNS = (
 Progress = Callable[[int, int, object, float], None]
 
 
-def _confinements(nu, lams, lam_ratios) -> tuple[float, np.ndarray, float]:
-    """Checked (nu, lam of each point, lam_c): every point 0 < lam < lam_c(nu)."""
+def _confinements(nu, lams, lam_ratios, ca_b) -> tuple[float, np.ndarray, float, float]:
+    """Checked (nu, lam of each point, lam_c, ca_b), with the single-point checks of
+    :func:`bem.vesicle.solve_vesicle` applied to every point (0 < lam < lam_c(nu))."""
+    from .vesicle import _check_inputs
+
     if (lams is None) == (lam_ratios is None):
         given = "neither" if lams is None else "both lams and lam_ratios"
         raise InvalidParameterError("lams", given, "exactly one of lams and lam_ratios")
@@ -82,10 +84,10 @@ def _confinements(nu, lams, lam_ratios) -> tuple[float, np.ndarray, float]:
     if values.ndim != 1 or values.size == 0:
         raise InvalidParameterError(name, np.array2string(values),
                                     "a non-empty 1-d sequence of finite numbers")
-    by_ratio, reason = lam_ratios is not None, "a vesicle with excess area (nu < 1) is needed"
-    points = [resolve_confinement(nu, None if by_ratio else v, v if by_ratio else None,
-                                  nu_reason=reason) for v in map(float, values)]
-    return points[0][0], np.array([p[1] for p in points]), points[0][2]
+    by_ratio = lam_ratios is not None
+    points = [_check_inputs(nu, None if by_ratio else v, v if by_ratio else None, ca_b)
+              for v in map(float, values)]
+    return points[0][0], np.array([p[1] for p in points]), points[0][2], points[0][3]
 
 
 def _with_runtime(res, seconds: float):
@@ -139,10 +141,7 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
     """
     from . import vesicle  # lazy: numba loads only when a sweep runs
 
-    nu, lam, lam_c = _confinements(nu, lams, lam_ratios)
-    ca_b = float(check_positive("ca_b", ca_b, reason="Ca_B = eta U R0^2/kappa"))
-    if not math.isfinite(ca_b):
-        raise InvalidParameterError("ca_b", ca_b, "a finite positive number")
+    nu, lam, lam_c, ca_b = _confinements(nu, lams, lam_ratios, ca_b)
     for key in ("lam", "lam_ratio"):
         if key in solver_kwargs:
             raise InvalidParameterError(key, str(solver_kwargs[key]),
