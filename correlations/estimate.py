@@ -108,8 +108,8 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
     """Evaluate ``quantity`` with the first valid method of the table (see module docstring).
 
     Rows of an enabled solver come first; rows of other solvers are skipped, but when one would
-    have been valid that is recorded in ``log["available"]`` (and per quantity in
-    ``log["covers"]``). Solver failures go to ``log["failures"]`` and the next row is tried.
+    have been valid that is recorded per quantity in ``log["covers"]``. Solver failures go to
+    ``log["failures"]`` and the next row is tried.
     """
     log = {} if log is None else log
     reasons, fallback = [], None
@@ -118,7 +118,6 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
     for m in METHODS:
         if (m.quantity == quantity and m.solver is not None and m.solver not in solvers
                 and m.validity.contains(**known)):
-            log.setdefault("available", set()).add(m.solver)
             log.setdefault("covers", {}).setdefault(quantity, set()).add(m.solver)
     for m in rows:
         missing = [r for r in m.requires if r not in known]
@@ -289,7 +288,8 @@ def _notes(quantities: dict, ca_b, log: dict) -> tuple:
     notes = []
     for solver, message in sorted(log.get("failures", {}).items()):
         notes.append(f"The {solver} solver was enabled but did not converge: {message}")
-    available = sorted(log.get("available", ()))
+    covers = log.get("covers", {})
+    available = sorted(set().union(*covers.values()))
     if available:
         plural = len(available) > 1
         notes.append("The " + " and ".join(available) + (" solvers cover" if plural else
@@ -299,7 +299,7 @@ def _notes(quantities: dict, ca_b, log: dict) -> tuple:
     missing = [k for k in QUANTITIES if quantities[k].value is None
                and quantities[k].note.startswith("no valid")]
     if missing:
-        covering = sorted(set().union(*(log.get("covers", {}).get(k, ()) for k in missing)))
+        covering = sorted(set().union(*(covers.get(k, ()) for k in missing)))
         hint = ("; " + " or ".join(f"--solver {a}" for a in covering) + " would compute "
                 "them (not run unless enabled)" if covering else "")
         notes.append(f"No closed-form method is valid for {', '.join(missing)} here{hint}; use "
