@@ -158,6 +158,7 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
             break
         step = float(np.max(np.abs(delta) / np.maximum(1.0, np.abs(z))))
         ratio = norm_new / norm if norm > 0 else 0.0
+        predicted = float(np.linalg.norm(F + J @ delta)) / norm if norm > 0 else 0.0
         J = J + np.outer(F_new - F - J @ delta, delta) / (delta @ delta)
         for j, col in exact(pl_new).items():
             J[:, j] = col
@@ -165,8 +166,8 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
         z, F, payload, norm = z_new, F_new, pl_new, norm_new
         mu = max(mu / 10.0, 1e-12)
         history.append(norm)
-        log.debug("levenberg_marquardt it %d: |F| = %.3e (ratio %.2f), step %.2e, jacobians %d",
-                  it, norm, ratio, step, n_jac)
+        log.debug("levenberg_marquardt it %d: |F| = %.3e (ratio %.2f, model %.2f), step %.2e, "
+                  "mu %.1e, jacobians %d", it, norm, ratio, predicted, step, mu, n_jac)
         if step < tol:
             success = True
             message = f"converged: relative step {step:.1e} < {tol:.0e}"

@@ -405,16 +405,23 @@ def fit_curve(curve: Callable, t0: float, t1: float, n_modes: int, *, density=()
 
 
 def equidistributing_density(curve: SpectralCurve, n_terms: int = 16, *,
-                             floor: float | None = None) -> np.ndarray:
+                             floor: float | None = None, gradient: float = 0.0) -> np.ndarray:
     r"""Density coefficients that spread the parameter evenly in :math:`\int w\,ds`.
 
-    Weight :math:`w = (\kappa_1^2 + \kappa_0^2)^{1/2}` with the meridional curvature of
-    ``curve`` and the floor :math:`\kappa_0` (default :math:`\pi/S`, the curvature of the sphere
-    of the same length), so that the parameter, hence the modes and panels, concentrates where
-    the curve bends sharply (rim of a flattened rear). The target :math:`g = W/(S w)` is
+    Weight :math:`w = (\kappa_1^2 + \kappa_0^2)^{1/2} + \beta\,|d\kappa_1/ds|^{1/3}` (lengths
+    in R) with the meridional curvature of ``curve``, the floor :math:`\kappa_0` (default
+    :math:`\pi/S`, the curvature of the sphere of the same length) and
+    :math:`\beta` = ``gradient``, so that the parameter, hence the modes and panels,
+    concentrates where the curve bends sharply (rim of a flattened rear) and, with
+    :math:`\beta > 0`, where the curvature changes fast: the ends of the cylindrical body of a
+    long vesicle near the critical confinement, where a cap of curvature ~1/R meets the flat
+    film over the lubrication length :math:`\sqrt{hR}`. The target :math:`g = W/(S w)` is
     projected on ``n_terms`` cosines with an exponential filter (order 8) so that g stays smooth.
+    The gradient term and its exponent 1/3 are a measured choice (fits of the lubrication
+    shapes, tests/bem/test_shape.py and docs/validation.md), not a theorem.
     """
     n_terms = int(check_range("n_terms", n_terms, 0, 256))
+    gradient = float(check_range("gradient", gradient, 0.0, 100.0))
     if n_terms == 0:
         return np.zeros(0)
     S = curve.length
@@ -423,6 +430,8 @@ def equidistributing_density(curve: SpectralCurve, n_terms: int = 16, *,
     s = curve.arc_length(t)
     k1, _ = curve.curvatures(t)
     wgt = np.sqrt(k1 * k1 + k0 * k0)
+    if gradient:
+        wgt = wgt + gradient * np.cbrt(np.abs(np.gradient(k1, s)))
     return _density_from_weight(s, wgt, S, n_terms)
 
 

@@ -222,12 +222,10 @@ def quiescent_velocity(op, curve: SpectralCurve):
 def vesicle_operator(result, n_tension: int | None = None):
     """:class:`bem.vesicle.VesicleOperator` at the parameters and resolution of a
     :class:`bem.results.VesicleResult`, its shape the reference (wall, inlet, panel breaks)."""
-    from .drop import DropDiscretisation
-    from .vesicle import VesicleOperator
+    from .vesicle import VesicleOperator, vesicle_discretisation
 
     pan = result.panels
-    disc = DropDiscretisation(n_modes=int(pan["modes"]), n_panels=int(pan["drop"]),
-                              order=int(pan["order"]))
+    disc = vesicle_discretisation(int(pan["modes"]), int(pan["order"]), int(pan["drop"]))
     return VesicleOperator(result.nu, result.lam, result.ca_b, disc, result.curve(),
                            n_tension or int(pan.get("tension", pan["modes"])))
 
