@@ -217,9 +217,10 @@ def _vesicle_options(p, sweep: bool) -> None:
                         "gamma_max (default 1e-4) [-]")
     p.add_argument("--residual-tol", type=float, default=1e-4, dest="residual_tol",
                    help="tolerance of the steady residual max|u - V e_x| (default 1e-4) [U]")
-    p.add_argument("--max-modes", type=int, default=40, dest="max_modes",
+    p.add_argument("--max-modes", type=int, default=None, dest="max_modes",
                    help="largest number of shape modes of the automatic refinement (default "
-                        "40; near lam_c use 48 with --tol 1e-3 --residual-tol 1e-3)")
+                        "40, or ~6 per tube radius of length for long vesicles, 64 at "
+                        "nu = 0.6 near lam_c; near lam_c use --tol 1e-2 --residual-tol 5e-3)")
 
 
 def add_bem_parser(subparsers) -> None:

@@ -65,7 +65,7 @@ import scipy.linalg as sla
 from scipy.interpolate import CubicSpline
 
 from lubrication.checks import InvalidParameterError, check_positive, check_range
-from lubrication.geometry import resolve_confinement
+from lubrication.geometry import critical_length, resolve_confinement
 
 from .assembly import poiseuille
 from .drop import DropDiscretisation, DropOperator, _panels_for
@@ -352,7 +352,7 @@ _DENSITIES = {
     "film": film_density,
 }
 
-#: length L/R of the initial shape above which :func:`solve_vesicle` uses the "bend" density by
+#: estimated length L/R above which :func:`solve_vesicle` uses the "bend" density by
 #: default: long vesicles (ν ≲ 0.75 near λc) need it, e.g. at (0.7, 1.5) the residual falls
 #: ÷4.5 per +8 modes with it against ÷2 with uniform arc length, while short ones converge
 #: faster without it ((0.9, 1.0): 32-mode residual 2.3e-5 uniform, 1.0e-4 "bend")
@@ -425,7 +425,7 @@ def _check_inputs(nu, lam, lam_ratio, ca_b):
 
 def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | None = None,
                   ca_b: float = 50.0, initial=None, n_modes: int | None = None,
-                  tol: float = 1e-4, residual_tol: float = 1e-4, max_modes: int = 40,
+                  tol: float = 1e-4, residual_tol: float = 1e-4, max_modes: int | None = None,
                   order: int = DEFAULT_ORDER, xtol: float = 1e-9, max_iter: int = 40,
                   density: str = "auto", density_terms: int = 16,
                   continuation: bool | None = None, rung_modes: int = 24):
@@ -446,6 +446,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         Shape modes of the fine level (the coarse level has round(2n/3)); default automatic,
         16, 24, 32, ... up to ``max_modes`` until the last pair agrees to ``tol`` (relative, in
         V/U, Δp⁺ and γ_max) with the pointwise residual max|u − V e_x| below ``residual_tol``.
+        Default ``max_modes``: 40, or for a long vesicle about 6 modes per tube radius of its
+        estimated length ℓ ≈ ℓc λ/λc (Chen et al. 2020 eq. sL): 64 at (0.6, 0.98 λc).
     order : int
         Gauss nodes per panel.
     xtol, max_iter : float, int
@@ -459,7 +461,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         entrance/exit); or "bend", the curvature density with a curvature-gradient term
         (``equidistributing_density(..., gradient=1)``, concentrates also on the ends of the
         film of a long vesicle, where a cap meets the cylindrical body). "auto" (default):
-        "bend" if the initial shape is longer than LONG_VESICLE (5 R), else "film" for
+        "bend" for a long vesicle (estimated ℓ ≈ ℓc λ/λc > LONG_VESICLE = 5), else "film" for
         lam/lam_c >= NEAR_CRITICAL (0.9) and "uniform" below.
     density_terms : int
         Cosine terms of that density (ignored for "uniform").
@@ -467,7 +469,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         Reach lam/lam_c > NEAR_CRITICAL through rungs 1 - lam/lam_c = 0.1, 0.05, 0.025, ...
         (each a ``rung_modes`` solve started from the previous one, the first from
         lubrication); a cold start from the lubrication shape there can drift to a spurious,
-        closing film. Default: on when ``initial`` is None and lam/lam_c > NEAR_CRITICAL.
+        closing film. Default: on when ``initial`` is None, lam/lam_c > NEAR_CRITICAL and the
+        vesicle is not long (a long one, ν ≲ 0.75, is a deep parachute at the first rung but
+        converges from the lubrication shape at its own λ through the mode levels).
     rung_modes : int
         Shape modes of each continuation rung.
 
@@ -492,10 +496,14 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         raise InvalidParameterError("density", density,
                                     '"auto", "uniform", "curvature", "bend" or "film"')
     ratio = lam / lam_c
+    ell = critical_length(nu) * ratio                # estimated length L/R (Chen eq. sL)
+    long = ell > LONG_VESICLE
     if continuation is None:
-        continuation = initial is None and ratio > NEAR_CRITICAL
+        continuation = initial is None and ratio > NEAR_CRITICAL and not long
     tol = float(check_range("tol", tol, 1e-12, 0.5))
     residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 10.0))
+    if max_modes is None:
+        max_modes = max(40, 8 * round(0.75 * ell)) if long else 40
     max_modes = int(check_range("max_modes", max_modes, 8, 256))
     if n_modes is not None:
         n_modes = int(check_range("n_modes", n_modes, 8, 256))
@@ -552,9 +560,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         raise InvalidParameterError("initial", type(initial).__name__,
                                     "a VesicleResult, SpectralCurve, LubricationResult or None")
     if density == "auto":
-        ell = float(np.subtract(*seed.extent()[::-1]))
-        density = ("bend" if ell > LONG_VESICLE else
-                   "film" if ratio >= NEAR_CRITICAL else "uniform")
+        density = "bend" if long else "film" if ratio >= NEAR_CRITICAL else "uniform"
     if density != "uniform":
         # the density is built from a finely resolved copy of the seed; a lubrication seed is
         # then refitted from the lubrication shape itself (not from its coarse fit)
