@@ -81,8 +81,8 @@ from .shape import (
 )
 
 __all__ = ["NEAR_CRITICAL", "WALL_REFINEMENT", "VesicleOperator", "capsule_seed",
-           "fit_lubrication", "lubrication_seed", "solve_vesicle", "spheroid_seed",
-           "vesicle_discretisation"]
+           "fit_lubrication", "lubrication_seed", "seed_from_lubrication", "solve_vesicle",
+           "spheroid_seed", "vesicle_discretisation"]
 
 log = logging.getLogger(__name__)
 
@@ -238,22 +238,33 @@ def vesicle_discretisation(n_modes: int, order: int = DEFAULT_ORDER,
 
 
 # ---------------------------------------------------------------------------- initial shapes
-def lubrication_seed(nu: float, lam: float, ca_b: float, n_modes: int):
-    """Spectral curve fitted to the lubrication solution at (nu, lam, ca_b); None if the solver
-    fails or the ``n_modes`` fit closes more than half of its gap (sharp parachute rims at small
-    nu). Returns (curve, lubrication result)."""
+def lubrication_seed(nu: float, lam: float, ca_b: float, n_modes: int,
+                     density: str = "uniform", density_terms: int = 16):
+    """Spectral curve fitted to the lubrication solution at (nu, lam, ca_b) (see
+    :func:`seed_from_lubrication`); None if the solver fails or the fit is rejected. Returns
+    (curve, lubrication result)."""
     from lubrication.solve import solve_lubrication
 
     lub = solve_lubrication(nu, lam, ca_b=ca_b)
     if not lub.success:
         return None, lub
-    curve = fit_lubrication(lub, n_modes)
+    return seed_from_lubrication(lub, n_modes, density, density_terms), lub
+
+
+def seed_from_lubrication(lub, n_modes: int, density: str = "uniform",
+                          density_terms: int = 16) -> SpectralCurve | None:
+    """``n_modes`` fit of a converged lubrication shape with the arc-length ``density`` (a key
+    of ``_DENSITIES`` or "uniform", built from a 128-mode fit); None if the fit closes more
+    than half of the lubrication gap (a sharp parachute rim the modes cannot carry)."""
+    dens = (() if density == "uniform"
+            else _DENSITIES[density](fit_lubrication(lub, 128), density_terms))
+    curve = fit_lubrication(lub, n_modes, dens)
     gap = 1.0 - float(np.max(lub.r))
-    if 1.0 - curve.max_radius() < 0.5 * gap:             # sharp rim: the fit closes the film
-        log.info("lubrication seed rejected: %d-mode fit has gap %.3g (lubrication %.3g)",
-                 n_modes, 1.0 - curve.max_radius(), gap)
-        return None, lub
-    return curve, lub
+    if 1.0 - curve.max_radius() < 0.5 * gap:
+        log.info("lubrication seed rejected: %d-mode %s fit has gap %.3g (lubrication %.3g)",
+                 n_modes, density, 1.0 - curve.max_radius(), gap)
+        return None
+    return curve
 
 
 def fit_lubrication(lub, n_modes: int, density=()) -> SpectralCurve:
@@ -453,7 +464,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     xtol, max_iter : float, int
         Relative step tolerance and iteration budget of each Levenberg–Marquardt level
         (:func:`bem.newton.levenberg_marquardt`; it also stops at the residual floor).
-    density : {"auto", "uniform", "curvature", "film"}
+    density : {"auto", "uniform", "curvature", "bend", "film"}
         Arc-length density of the shape parametrisation (and hence of modes and panels):
         uniform; built from the seed's curvature (:func:`bem.shape.equidistributing_density`,
         concentrates on sharp bends); or from the lubrication weight (h + h_min)^(-1/2) of the
@@ -500,6 +511,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     long = ell > LONG_VESICLE
     if continuation is None:
         continuation = initial is None and ratio > NEAR_CRITICAL and not long
+    if density == "auto":
+        density = "bend" if long else "film" if ratio >= NEAR_CRITICAL else "uniform"
     tol = float(check_range("tol", tol, 1e-12, 0.5))
     residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 10.0))
     if max_modes is None:
@@ -534,18 +547,18 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         if rung is not None:
             initial = rung
             seed_source = f"continuation (lam/lam_c = {', '.join(f'{r:g}' for r in _rungs(ratio))})"
-    lub = None                                       # the lubrication result seeding the shape
+    from_lubrication = False                         # the seed is already fitted with density
     if isinstance(initial, SpectralCurve):
         seed = initial
     elif isinstance(initial, LubricationResult) or initial is None:
         seed = None
         if initial is None:
-            seed, lub = lubrication_seed(nu, lam, ca_b, sequence[0])
+            seed, _ = lubrication_seed(nu, lam, ca_b, sequence[0], density, density_terms)
             seed_source = "lubrication"
         elif initial.success:
-            seed, lub = fit_lubrication(initial, sequence[0]), initial
+            seed = seed_from_lubrication(initial, sequence[0], density, density_terms)
+        from_lubrication = seed is not None
         if seed is None:
-            lub = None
             seed = spheroid_seed(nu, lam, sequence[0])
             seed_source = "spheroid"
             if seed.max_radius() > 0.95:                   # a spheroid of small nu: too fat
@@ -559,15 +572,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     else:
         raise InvalidParameterError("initial", type(initial).__name__,
                                     "a VesicleResult, SpectralCurve, LubricationResult or None")
-    if density == "auto":
-        density = "bend" if long else "film" if ratio >= NEAR_CRITICAL else "uniform"
-    if density != "uniform":
-        # the density is built from a finely resolved copy of the seed; a lubrication seed is
-        # then refitted from the lubrication shape itself (not from its coarse fit)
-        dens = _DENSITIES[density](fit_lubrication(lub, 128) if lub is not None else seed,
-                                   density_terms)
-        seed = (fit_lubrication(lub, sequence[0], dens) if lub is not None
-                else fit_curve(seed.sample, 0.0, 1.0, sequence[0], density=dens))
+    if density != "uniform" and not from_lubrication:
+        seed = fit_curve(seed.sample, 0.0, 1.0, sequence[0],
+                         density=_DENSITIES[density](seed, density_terms))
     levels, timings, iterations = [], {}, dict(rung_log)
     message = ""
     prev = seed
