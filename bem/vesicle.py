@@ -45,13 +45,24 @@ membrane panels at λ/λc = 0.97). A cold start from the lubrication shape at λ
 to a spurious, nearly closed film (min gap 1.5e-3); the default continuation in λ/λc (rungs
 0.9, 0.95, 0.975, ... below the target) avoids it. Measured at ν = 0.9, Ca_B = 50, 48 modes
 (docs/validation.md): λ/λc = 0.95, 0.97, 0.98 reach residuals 3.2e-4, 1.2e-3, 2.9e-3, V/U within
-0.04 % and Δp⁺ 6.8, 4.65, 3.2 % above lubrication, in ~4 min per point. Long vesicles (ν ≲ 0.7
-near λc) are beyond one global sine series of ~40 modes: see the validation report.
+0.04 % and Δp⁺ 6.8, 4.65, 3.2 % above lubrication, in ~4 min per point.
+
+Long vesicles (Chen's length estimate ℓc λ/λc > 5 R, i.e. ν ≲ 0.75 at moderate to high
+confinement) have caps, a sharp parachute rim and the junctions where a cap meets the thin film,
+each on scales ≪ their length. ``density="bend"`` (their default) adds a curvature-gradient term
+to the curvature weight (:func:`bem.shape.equidistributing_density`), which resolves all three
+(fitted lubrication shape at ν = 0.6, λ/λc = 0.98: relative gap error 1e-4 with 64 modes, against
+8e-3 with the curvature weight alone). They start from the lubrication shape at their own λ
+(no λ/λc rungs: at ν = 0.6 the first rung, 0.9, is a deep parachute) and climb 16, 24, ... up to
+about 6 modes per R of length; the coarse levels are what keeps that cold start on the physical
+branch (starting at 43–64 modes it drifts to a closing film).
 
 Initial shapes: the lubrication solution at the same (ν, λ, Ca_B)
-(:func:`lubrication.solve.solve_lubrication`) mapped to the spectral curve with
-:func:`bem.shape.fit_curve`; if it fails (or the fit closes the film), a prolate spheroid of the
-right ν, or where that does not fit in the tube a capsule of radius λ/λc (:func:`capsule_seed`).
+(:func:`lubrication.solve.solve_lubrication`) mapped to the spectral curve, with the density of
+the solve, by :func:`bem.shape.fit_curve`; if it fails (or the fit closes the film), a prolate
+spheroid of the right ν, or where that does not fit in the tube a capsule of radius λ/λc
+(:func:`capsule_seed`; for a long parachute the fore-aft symmetric capsule can end in a spurious
+steady-looking state, residual ~1e-2 at every level, which the residual test reports).
 """
 
 from __future__ import annotations
