@@ -257,11 +257,12 @@ def test_parachute_bullet_transition_at_nu_0p6_near_chen_line():
     """nu = 0.6 (long vesicles, "bend" density, started from lubrication): parachute at
     lam = 1.78 (rear curvature +0.762, gap 6.96 % of R), bullet at 1.84 (-0.511, 5.53 %), so
     lam_T = 1.816 against Chen et al. 2020 eq. transition 1.814 (+0.1 %; their text: ~1.8, gap
-    ~7 %). Asserted within 5 %, as at nu = 0.9; the gap at lam_T between 5 and 7 % of R."""
+    ~7 %; a third solve at 1.81, rear curvature +0.043, narrows it to 1.812). Asserted within
+    5 %, as at nu = 0.9; the gap at lam_T between 5 and 7 % of R."""
     from correlations.shape import transition_confinement_chen2020
-    kw = {"tol": 2e-2, "residual_tol": 5e-3}       # stops at 56 modes for both (measured)
-    a = solve_vesicle(0.6, 1.78, **kw)
-    b = solve_vesicle(0.6, 1.84, **kw)
+    # both stop at 56 modes (measured; 1.78's last pair differs by 1.2 % in dp+)
+    a = solve_vesicle(0.6, 1.78, tol=2e-2, residual_tol=5e-3)
+    b = solve_vesicle(0.6, 1.84, tol=1e-2, residual_tol=5e-3)
     assert a.success and b.success, (a.message, b.message)
     assert a.shape_class == "parachute" and b.shape_class == "bullet"
     ka, kb = a.curvature_rear, b.curvature_rear
