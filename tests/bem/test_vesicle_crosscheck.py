@@ -10,6 +10,11 @@ tests/bem/test_vesicle.py and docs/validation.md). Measured at nu = 0.9, 48 mode
   0.95        1.048257 / 1.048661   146.2 / 136.9 (+6.8 %)     3.2e-4
   0.97        1.028833 / 1.028948   245.8 / 234.9 (+4.65 %)    1.2e-3
 
+and at nu = 0.6 (default modes, "bend" density):
+
+  0.95        1.050317 / 1.050373   675.7 / 661.8 (+2.1 %)     8.4e-4 (48 modes)
+  0.98        1.022376 / 1.019998   1866.8 / 1834.2 (+1.8 %)   2.4e-3 (64 modes)
+
 Long vesicles (nu < ~0.75) use the "bend" arc-length density and start from the lubrication
 shape at their own lam (bem.vesicle); their near-lam_c solves are not converged to the default
 tolerances (nu = 0.6, lam/lam_c = 0.98, 64 modes: residual 2.4e-3, V/U still moving by 2e-4 per
