@@ -158,8 +158,9 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
             break
         step = float(np.max(np.abs(delta) / np.maximum(1.0, np.abs(z))))
         ratio = norm_new / norm if norm > 0 else 0.0
-        predicted = float(np.linalg.norm(F + J @ delta)) / norm if norm > 0 else 0.0
-        J = J + np.outer(F_new - F - J @ delta, delta) / (delta @ delta)
+        Jd = J @ delta
+        predicted = float(np.linalg.norm(F + Jd)) / norm if norm > 0 else 0.0
+        J = J + np.outer(F_new - F - Jd, delta) / (delta @ delta)
         for j, col in exact(pl_new).items():
             J[:, j] = col
         was_fresh, fresh = fresh, False

@@ -169,16 +169,15 @@ def test_film_density_clusters_the_parameter_in_the_thin_gap():
     assert film_density(curve, 0).size == 0
 
 
-def _lubrication_gap_error(nu, ratio, n_modes, gradient):
-    """Largest error in r relative to the gap 1 - r of the n_modes fit (curvature density with
-    this ``gradient`` weight, 32 terms) of the lubrication shape at (nu, lam/lam_c = ratio)."""
-    from bem.vesicle import fit_lubrication
+def _lubrication_gap_error(nu, ratio, n_modes, density):
+    """Largest error in r relative to the gap 1 - r of the n_modes fit (``density`` "curvature"
+    or "bend", 32 terms) of the lubrication shape at (nu, lam/lam_c = ratio)."""
+    from bem.vesicle import seed_from_lubrication
     from lubrication.solve import solve_lubrication
 
     lub = solve_lubrication(nu, lam_ratio=ratio, ca_b=50.0)
     assert lub.success, lub.message
-    dens = equidistributing_density(fit_lubrication(lub, 128), 32, gradient=gradient)
-    fit = fit_lubrication(lub, n_modes, dens)
+    fit = seed_from_lubrication(lub, n_modes, density, 32)
     t = np.linspace(0.0, 1.0, 8001)
     s, (_, r) = fit.arc_length(t), fit.position(t)
     r_lub = np.interp(s, lub.s, lub.r)
@@ -190,8 +189,8 @@ def test_curvature_gradient_density_resolves_the_long_near_critical_vesicle():
     ~sqrt(hR)): with the curvature-gradient term the 64-mode fit of the lubrication shape
     represents the gap to better than 1e-3 relative (measured 9.5e-5, 2.1e-6 at 96 modes);
     the curvature weight alone leaves 8e-3 (1e-3 at 96). The error falls with the modes."""
-    plain = _lubrication_gap_error(0.6, 0.98, 64, 0.0)
-    bend = [_lubrication_gap_error(0.6, 0.98, n, 1.0) for n in (48, 64, 96)]
+    plain = _lubrication_gap_error(0.6, 0.98, 64, "curvature")
+    bend = [_lubrication_gap_error(0.6, 0.98, n, "bend") for n in (48, 64, 96)]
     assert plain > 3e-3, plain
     assert bend[1] < 1e-3 and bend[1] < plain / 10, (bend, plain)
     assert bend[0] > bend[1] > bend[2], bend
