@@ -1,0 +1,64 @@
+"""bem.newton.valley_levenberg_marquardt on a curved valley with a known minimiser.
+
+Reference: scipy.optimize.least_squares (trust-region reflective, analytic Jacobian, tolerances
+1e-15), an independent implementation.
+"""
+
+import numpy as np
+import pytest
+from scipy.optimize import least_squares
+
+from bem.newton import valley_levenberg_marquardt
+from lubrication.checks import InvalidParameterError
+
+
+def _banana(z):
+    """A curved (Rosenbrock) valley in (z0, z1), coupled weakly to four stiffer unknowns, with
+    more equations than unknowns so that the minimum has a non-zero residual (as the BEM's)."""
+    r = [10.0 * (z[1] - z[0] ** 2), 1.0 - z[0], 0.3 * z[0] * z[1] - 0.1]
+    for j in range(2, z.size):
+        r.append(3.0 * (z[j] - 0.2 * z[j - 1]) + 0.05 * z[0] ** 2)
+        r.append(0.1 * np.sin(z[j] + j) - 0.02 * z[1])
+    return np.array(r)
+
+
+def _jac(z, h=1e-7):
+    F = _banana(z)
+    return np.column_stack([(_banana(z + h * e) - F) / h for e in np.eye(z.size)])
+
+
+def _reference(z0):
+    return least_squares(_banana, z0, jac=_jac, xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+
+
+def test_valley_solver_finds_the_least_squares_minimiser_of_a_curved_valley():
+    z0 = np.array([-1.2, 1.0, 0.5, -0.5, 0.3, 0.1])                  # Rosenbrock's start
+    ref = _reference(z0)
+    assert np.linalg.norm(_banana(ref)) > 0.05                     # a real residual floor
+    calls = []
+
+    def fun(z):
+        calls.append(1)
+        return _banana(z), None
+
+    rep = valley_levenberg_marquardt(fun, z0, tol=1e-12, max_iter=400, directions=2,
+                                     promise=1e-12, max_jacobians=10)
+    assert rep.success, rep.message
+    assert rep.evaluations == len(calls)
+    assert np.allclose(rep.z, ref, atol=1e-6)
+    assert np.linalg.norm(rep.F) == pytest.approx(np.linalg.norm(_banana(ref)), rel=1e-10)
+
+
+def test_valley_solver_reports_an_invalid_start_and_recovers_from_invalid_trials():
+    def fun(z):
+        if z[0] > 1.5:                                   # e.g. a shape that touches the wall
+            raise InvalidParameterError("shape", z[0], "z0 <= 1.5")
+        return _banana(z), None
+
+    rep = valley_levenberg_marquardt(fun, np.array([2.0, 0, 0, 0]))
+    assert not rep.success and "initial shape rejected" in rep.message
+    z0 = np.array([-1.2, 1.0, 0.5, -0.5])
+    rep = valley_levenberg_marquardt(fun, z0, tol=1e-12, directions=1, promise=1e-12,
+                                     max_jacobians=10)
+    assert rep.success, rep.message
+    assert np.allclose(rep.z, _reference(z0), atol=1e-6)
