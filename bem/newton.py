@@ -237,10 +237,12 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
     the smallest singular values (``directions + 1`` evaluations instead of one per unknown).
     Every second step the iterate is extrapolated along z_k - z_{k-2} by 1, 2, 4, ... (up to
     64) times while |F| decreases (parallel tangents, Shah, Buehler & Kempthorne 1964).
-    When a step fails, or |F| falls by less than 0.1 %, a fresh difference Jacobian is made;
-    converged when with it the Gauss–Newton model promises less than a ``promise`` relative
-    decrease of |F|^2 (the residual floor of the overdetermined equations), or the relative
-    step falls below ``tol``. At most ``max_jacobians`` difference Jacobians.
+    When a step fails, |F| falls by less than 0.1 % or the relative step is below ``tol``, a
+    fresh difference Jacobian is made; converged when with it the Gauss–Newton model promises
+    less than a ``promise`` relative decrease of |F|^2 (the residual floor of the
+    overdetermined equations), or its step is below ``tol`` (a small step of an updated
+    Jacobian, with large damping, proves nothing). At most ``max_jacobians`` difference
+    Jacobians.
     """
     z = np.array(z0, dtype=float)
     if start is not None:
@@ -320,10 +322,10 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
         log.debug("valley_levenberg_marquardt it %d: |F| = %.4e (step ratio %.3f, with "
                   "extrapolation %.3f), step %.2e, mu %.1e, evaluations %d, jacobians %d",
                   it, norm, ratio, gain, step, mu, n_eval, n_jac)
-        if step < tol:
-            success, message = True, f"converged: relative step {step:.1e} < {tol:.0e}"
-            break
-        if gain > 1.0 - 1e-3:                               # stalled: judge with a fresh J
+        if gain > 1.0 - 1e-3 or step < tol:       # stalled (or a heavily damped step): judge
+            if fresh and step < tol:                # with a fresh J
+                success, message = True, f"converged: relative step {step:.1e} < {tol:.0e}"
+                break
             if n_jac >= max_jacobians:
                 message = (f"|F| stalled at {norm:.3e} with the difference-Jacobian budget "
                            f"({max_jacobians}) spent")

@@ -190,11 +190,36 @@ class SpectralCurve:
         return math.pi * u - b1 * np.sin(math.pi * u), math.pi * (1.0 - b1 * np.sinc(u))
 
     def _integrals(self, u, front: bool):
-        """(int_0^1 g cos phi dt, int_0^1 g sin phi dt), argument u t, at distances u."""
-        t, w = _gauss01(self._quad)
+        """(int_0^1 g cos phi dt, int_0^1 g sin phi dt), argument u t, at distances u.
+
+        Computed as cumulative sums over the sorted distances: each gap between neighbours
+        (split into pieces of at most 16 / (3 quad) in u) gets a 16-point Gauss rule, i.e. at
+        least 1.5x the node density of one ``quad``-point rule over [0, 1/2], which integrates
+        the band-limited integrand to round-off (checked in tests against that rule)."""
         u = np.asarray(u, dtype=float)
-        phi, g = self._phi(u[..., None] * t, front)
-        return (g * np.cos(phi)) @ w, (g * np.sin(phi)) @ w
+        flat = u.ravel()
+        order = np.argsort(flat)
+        us = flat[order]
+        t, w = _gauss01(16)
+        gaps = np.diff(us, prepend=0.0)
+        pieces = np.maximum(1, np.ceil(gaps * (3.0 * self._quad / 16.0))).astype(int)
+        owner = np.repeat(np.arange(us.size), pieces)
+        first = np.cumsum(pieces) - pieces
+        k = np.arange(owner.size) - first[owner]
+        h = gaps[owner] / pieces[owner]
+        start = us[owner] - gaps[owner] + k * h
+        phi, g = self._phi(start[:, None] + h[:, None] * t, front)
+        ic = np.zeros(us.size)
+        is_ = np.zeros(us.size)
+        np.add.at(ic, owner, h * ((g * np.cos(phi)) @ w))
+        np.add.at(is_, owner, h * ((g * np.sin(phi)) @ w))
+        ic, is_ = np.cumsum(ic), np.cumsum(is_)
+        pos = us > 0.0
+        c = np.where(pos, ic / np.where(pos, us, 1.0), self._phi(np.zeros(1), front)[1][0])
+        sn = np.where(pos, is_ / np.where(pos, us, 1.0), 0.0)
+        out_c, out_s = np.empty_like(flat), np.empty_like(flat)
+        out_c[order], out_s[order] = c, sn
+        return out_c.reshape(u.shape), out_s.reshape(u.shape)
 
     # ------------------------------------------------------------------ pointwise geometry
     def g(self, tau):

@@ -228,7 +228,7 @@ class VesicleOperator(DropOperator):
         ex = np.zeros(2 * nd)
         ex[0::2] = 1.0
         M = np.column_stack([Ug, -ex]) * sw[:, None]
-        sol, *_ = np.linalg.lstsq(M, -u0 * sw, rcond=1e-13)
+        sol, *_ = sla.lstsq(M, -u0 * sw, cond=1e-13, lapack_driver="gelsy")
         F = u0 * sw + M @ sol
         g, V = sol[:-1], float(sol[-1])
         res = F / sw
@@ -241,7 +241,9 @@ class VesicleOperator(DropOperator):
 #: wall panels of the vesicle meshes, relative to the drop's rule (DropDiscretisation.wall_
 #: refinement): the single layer on the wall is smooth on the scale of the membrane panels, and
 #: a 4x coarser wall than the drop's changes V/U and Δp⁺ by < 1e-7 (relative) at (ν, λ) =
-#: (0.9, 1.0) and (0.6, 0.98 λc) while cutting the wall factorisation ~15x (validation.md)
+#: (0.9, 1.0) and (0.6, 0.98 λc) while cutting the wall factorisation ~15x (validation.md).
+#: 0.15 would change them by ≤ 6e-9 more, but leaves a 6e-5 error in the wall shear at the
+#: ends of the meshed tube (Poiseuille there), so the wall stays at 0.25
 WALL_REFINEMENT = 0.25
 
 
@@ -495,7 +497,10 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         (``equidistributing_density(..., gradient=1)``, concentrates also on the ends of the
         film of a long vesicle, where a cap meets the cylindrical body). "auto" (default):
         "bend" for a long vesicle (estimated ℓ ≈ ℓc λ/λc > LONG_VESICLE = 5), else "film" for
-        lam/lam_c >= NEAR_CRITICAL (0.9) and "uniform" below.
+        lam/lam_c >= NEAR_CRITICAL (0.9) and "uniform" below. With ``initial`` a curve or a
+        VesicleResult, the density is re-built on that shape: re-solving a long vesicle from
+        its own result (``initial=result, n_modes=...``) resolves it better than the density
+        of the lubrication seed (at (0.6, 1.94), 64 modes: residual 8.2e-4 instead of 2.7e-3).
     density_terms : int
         Cosine terms of that density (ignored for "uniform").
     continuation : bool, optional

@@ -194,3 +194,22 @@ def test_curvature_gradient_density_resolves_the_long_near_critical_vesicle():
     assert plain > 3e-3, plain
     assert bend[1] < 1e-3 and bend[1] < plain / 10, (bend, plain)
     assert bend[0] > bend[1] > bend[2], bend
+
+
+def test_pole_integrals_match_one_fine_gauss_rule_per_point():
+    """The cumulative pole integrals of SpectralCurve._integrals against the direct rule (one
+    Gauss rule on [0, u] per point, 4x the ``_quad`` nodes): round-off agreement (measured
+    <= 2e-14 for the rough 96-mode curve; the direct ``_quad`` rule itself 9e-14) for dense
+    panel-like samples, sparse random ones, repeated points, the pole itself and u = 1/2."""
+    from bem.shape import _gauss01
+    rng = np.random.default_rng(3)
+    for n, j, amp in ((64, 16, 0.01), (96, 16, 0.02), (8, 0, 0.1)):
+        c = SpectralCurve(rng.normal(size=n) * amp, 10.0, 0.0, rng.normal(size=j) * 0.02)
+        t, w = _gauss01(4 * c._quad)
+        for u in (np.linspace(0.0, 0.5, 352), rng.uniform(0.0, 0.5, 50), np.array([0.2, 0.2]),
+                  np.array([0.5]), np.array([1e-9, 0.3])):
+            for front in (False, True):
+                phi, g = c._phi(u[:, None] * t, front)
+                ic, is_ = c._integrals(u, front)
+                assert np.max(np.abs(ic - (g * np.cos(phi)) @ w)) < 5e-14
+                assert np.max(np.abs(is_ - (g * np.sin(phi)) @ w)) < 5e-14
