@@ -32,7 +32,8 @@ import numpy as np
 
 from lubrication.checks import InvalidParameterError
 
-__all__ = ["LMReport", "difference_jacobian", "levenberg_marquardt", "valley_levenberg_marquardt"]
+__all__ = ["LMReport", "difference_jacobian", "levenberg_marquardt",
+           "valley_levenberg_marquardt"]
 
 log = logging.getLogger(__name__)
 
@@ -193,8 +194,8 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
 
 
 def _directional_update(fun, z, F, J, Q, fd_step):
-    """J corrected along the orthonormal columns of Q by forward differences (len(Q.T)
-    columns): J <- J + (J_fd Q - J Q) Q^T; a step that makes the shape invalid is taken
+    """J corrected along the orthonormal columns of Q by forward differences (one evaluation
+    per column): J <- J + (J_fd Q - J Q) Q^T; a step that makes the shape invalid is taken
     backwards. Returns (J, evaluations)."""
     h = fd_step * max(1.0, float(np.max(np.abs(z))))
     JQ = np.empty((F.size, Q.shape[1]))
