@@ -12,8 +12,8 @@ tests/bem/test_vesicle.py and docs/validation.md). Measured at nu = 0.9, 48 mode
 
 and at nu = 0.6 (default modes, "bend" density):
 
-  0.95        1.050317 / 1.050373   675.7 / 661.8 (+2.1 %)     8.4e-4 (48 modes)
-  0.98        1.022376 / 1.019998   1866.8 / 1834.2 (+1.8 %)   2.4e-3 (64 modes)
+  0.95        1.050463 / 1.050373   676.10 / 661.81 (+2.16 %)  1.6e-3 (40 modes)
+  0.98        1.021012 / 1.019998   1852.28 / 1834.19 (+0.99 %) 3.0e-3 (64 modes)
 
 Long vesicles (nu < ~0.75) use the "bend" arc-length density, start from the lubrication
 shape at their own lam and are solved by the valley Levenberg–Marquardt (bem.vesicle); their
