@@ -76,6 +76,18 @@ def difference_jacobian(fun, z, F, fd_step, exact):
     return J, n_eval
 
 
+def _initial_state(fun, z, start):
+    """(F, payload, evaluations) at ``z``, ``start`` = (F, payload) if the caller has it; an
+    LMReport of the failure if ``fun`` rejects ``z``."""
+    if start is not None:
+        return (*start, 0)
+    try:
+        F, payload = fun(z)
+    except InvalidParameterError as exc:
+        return LMReport(False, f"initial shape rejected: {exc}", z, None, None, 0, 1, 0)
+    return F, payload, 1
+
+
 def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
                         fd_step: float = 1e-7, max_jacobians: int = 8,
                         exact_columns=None, stall: float | None = None,
@@ -95,14 +107,10 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
     caller has already evaluated it (saves one evaluation).
     """
     z = np.array(z0, dtype=float)
-    if start is not None:
-        (F, payload), n_eval = start, 0
-    else:
-        try:
-            F, payload = fun(z)
-        except InvalidParameterError as exc:
-            return LMReport(False, f"initial shape rejected: {exc}", z, None, None, 0, 1, 0)
-        n_eval = 1
+    first = _initial_state(fun, z, start)
+    if isinstance(first, LMReport):
+        return first
+    F, payload, n_eval = first
 
     def exact(pl):
         return exact_columns(pl) if exact_columns is not None else {}
@@ -246,20 +254,22 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
     Jacobians.
     """
     z = np.array(z0, dtype=float)
-    if start is not None:
-        (F, payload), n_eval = start, 0
-    else:
-        try:
-            F, payload = fun(z)
-        except InvalidParameterError as exc:
-            return LMReport(False, f"initial shape rejected: {exc}", z, None, None, 0, 1, 0)
-        n_eval = 1
+    first = _initial_state(fun, z, start)
+    if isinstance(first, LMReport):
+        return first
+    F, payload, n_eval = first
     norm = float(np.linalg.norm(F))
     history, path = [norm], [z.copy()]
-    J, n_eval_j = difference_jacobian(fun, z, F, fd_step, {})
-    n_eval += n_eval_j
-    n_jac, fresh, mu = 1, True, 1e-8
+    n_jac, mu = 0, 1e-8
     success, message, it = False, "", 0
+
+    def fresh_jacobian():
+        nonlocal n_eval, n_jac
+        J, n = difference_jacobian(fun, z, F, fd_step, {})
+        n_eval, n_jac = n_eval + n, n_jac + 1
+        return J
+
+    J, fresh = fresh_jacobian(), True
 
     def evaluate(zz):
         nonlocal n_eval
@@ -283,8 +293,7 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
             mu = max(10.0 * mu, 1e-4)
         if F_new is None:
             if not fresh and n_jac < max_jacobians:
-                J, n = difference_jacobian(fun, z, F, fd_step, {})
-                n_eval, n_jac, fresh = n_eval + n, n_jac + 1, True
+                J, fresh = fresh_jacobian(), True
                 continue
             promised = _promised(J, F, norm)
             success = fresh and promised < promise
@@ -331,8 +340,7 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
                 message = (f"|F| stalled at {norm:.3e} with the difference-Jacobian budget "
                            f"({max_jacobians}) spent")
                 break
-            J, n = difference_jacobian(fun, z, F, fd_step, {})
-            n_eval, n_jac, fresh = n_eval + n, n_jac + 1, True
+            J, fresh = fresh_jacobian(), True
             promised = _promised(J, F, norm)
             if promised < promise:
                 success = True
