@@ -57,9 +57,14 @@ each on scales ≪ their length. ``density="bend"`` (their default) adds a curva
 to the curvature weight (:func:`bem.shape.equidistributing_density`), which resolves all three
 (fitted lubrication shape at ν = 0.6, λ/λc = 0.98: relative gap error 1e-4 with 64 modes, against
 8e-3 with the curvature weight alone). They start from the lubrication shape at their own λ
-(no λ/λc rungs: at ν = 0.6 the first rung, 0.9, is a deep parachute) and climb 16, 24, ... up to
-about 6 modes per R of length; the coarse levels are what keeps that cold start on the physical
-branch (starting at 43–64 modes it drifts to a closing film).
+(no λ/λc rungs: at ν = 0.6 the first rung, 0.9, is a deep parachute) and climb through carrier
+levels of 16, 32, 48, ... modes (one difference Jacobian each: they only keep that cold start on
+the physical branch; starting at 43–64 modes it drifts to a closing film) to the refinement pair
+(N − 8, N), N about 6 modes per R of length, both solved to their least-squares minimum. The
+last level uses the density re-built on the BEM shape of the one before, which resolves the
+rear film neck that the lubrication shape's density misses (at (0.6, 1.94), 64 modes: residual
+1.3e-3 instead of 2.7e-3, γ_max 986 instead of 931, mode-converged 1011 ± 2 by
+:func:`mode_convergence`; docs/validation.md).
 
 Initial shapes: the lubrication solution at the same (ν, λ, Ca_B)
 (:func:`lubrication.solve.solve_lubrication`) mapped to the spectral curve, with the density of
@@ -96,8 +101,8 @@ from .shape import (
 )
 
 __all__ = ["NEAR_CRITICAL", "WALL_REFINEMENT", "VesicleOperator", "capsule_seed",
-           "fit_lubrication", "lubrication_seed", "seed_from_lubrication", "solve_vesicle",
-           "spheroid_seed", "vesicle_discretisation"]
+           "fit_lubrication", "lubrication_seed", "mode_convergence", "seed_from_lubrication",
+           "solve_vesicle", "spheroid_seed", "vesicle_discretisation"]
 
 log = logging.getLogger(__name__)
 
@@ -142,28 +147,30 @@ class VesicleOperator(DropOperator):
 
     def curve(self, modes) -> SpectralCurve:
         """Closed, centred curve of the vesicle's volume and area; ``modes[area_mode]`` is
-        replaced by the value that gives the area (secant iteration from the given value)."""
+        replaced by the value that gives the area (secant iteration from the given value, its
+        first step with the slope dA/dc of the previous call)."""
         m = np.array(modes, dtype=float)
         j = self.area_mode
-        h = 1e-4 * max(1.0, abs(m[j]))
-        c0 = m[j]
-        f0 = self._raw_curve(m).area() - self.area
-        m[j] = c0 + h
-        f1 = self._raw_curve(m).area() - self.area
-        x0, x1 = c0, c0 + h
+        x0 = m[j]
+        c = self._raw_curve(m)
+        f0 = c.area() - self.area
+        if abs(f0) < 1e-14 * self.area:
+            return c
+        slope = getattr(self, "_area_slope", 0.0)
+        x1 = x0 - f0 / slope if slope else x0 + 1e-4 * max(1.0, abs(x0))
         for _ in range(40):
-            if abs(f1) < 1e-14 * self.area:
-                break
-            if f1 == f0:
-                raise InvalidParameterError("modes", "a shape whose area cannot be adjusted",
-                                            "a shape near the vesicle's area")
-            x0, x1, f0 = x1, x1 - f1 * (x1 - x0) / (f1 - f0), f1
             m[j] = x1
-            f1 = self._raw_curve(m).area() - self.area
-        else:
-            raise InvalidParameterError("modes", "a shape whose area cannot be adjusted",
-                                        "a shape near the vesicle's area")
-        return self._raw_curve(m)
+            c = self._raw_curve(m)
+            f1 = c.area() - self.area
+            if abs(f1) < 1e-14 * self.area:
+                if f1 != f0 and x1 != x0:
+                    self._area_slope = (f1 - f0) / (x1 - x0)
+                return c
+            if f1 == f0:
+                break
+            x0, x1, f0 = x1, x1 - f1 * (x1 - x0) / (f1 - f0), f1
+        raise InvalidParameterError("modes", "a shape whose area cannot be adjusted",
+                                    "a shape near the vesicle's area")
 
     def _dependent(self) -> list[int]:
         """c_1 closes the curve, the area mode gives the area."""
@@ -213,7 +220,8 @@ class VesicleOperator(DropOperator):
         inl = influence(drop.x.ravel(), rb, self.inlet, tol=tol)
         col_dp = inl[:, 0::2].sum(axis=1) / _EIGHT_PI
         AQ = (A @ Q) / _EIGHT_PI
-        qw = -sla.lu_solve(self.lu_wall, AQ[2 * nd:] + np.outer(self.col_dp_wall, dp))
+        qw = -sla.lu_solve(self.lu_wall, AQ[2 * nd:] + np.outer(self.col_dp_wall, dp),
+                            check_finite=False)
         Uc = AQ[: 2 * nd] + (B @ qw) / _EIGHT_PI + np.outer(col_dp, dp)
         u0 = Uc[:, 0].copy()
         u0[0::2] += poiseuille(rb)
@@ -349,10 +357,12 @@ def capsule_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
 
 # ---------------------------------------------------------------------------- one level
 def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, max_iter,
-                 seed_level=False, valley=False):
+                 seed_level=False, valley=False, carrier=False):
     """Levenberg–Marquardt at one resolution from ``seed``
     (:func:`bem.newton.valley_levenberg_marquardt` if ``valley``, with 8 ``max_iter`` cheap
-    iterations, else :func:`bem.newton.levenberg_marquardt`); returns (state, op, info)."""
+    iterations, else :func:`bem.newton.levenberg_marquardt`); returns (state, op, info).
+    ``seed_level``: the first level of a ladder (a smaller Jacobian budget); ``carrier``: a
+    valley level that only seeds the next one (one difference Jacobian)."""
     ref = fit_curve(seed.sample, 0.0, 1.0, disc.n_modes, density=seed.density) \
         if seed.n_modes != disc.n_modes else seed
     op = VesicleOperator(nu, lam, ca_b, disc, ref, n_tension)
@@ -365,7 +375,7 @@ def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, m
     if valley:
         rep = valley_levenberg_marquardt(fun, op.free(template), tol=xtol,
                                          max_iter=8 * max_iter,
-                                         max_jacobians=2 if seed_level else 4)
+                                         max_jacobians=1 if carrier else 2 if seed_level else 4)
     else:
         rep = levenberg_marquardt(fun, op.free(template), tol=xtol, max_iter=max_iter,
                                   max_jacobians=3 if seed_level else 8,
@@ -480,9 +490,12 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     n_modes : int, optional
         Shape modes of the fine level (the coarse level has round(2n/3)); default automatic,
         16, 24, 32, ... up to ``max_modes`` until the last pair agrees to ``tol`` (relative, in
-        V/U, Δp⁺ and γ_max) with the pointwise residual max|u − V e_x| below ``residual_tol``.
-        Default ``max_modes``: 40, or for a long vesicle about 6 modes per tube radius of its
-        estimated length ℓ ≈ ℓc λ/λc (Chen et al. 2020 eq. sL): 64 at (0.6, 0.98 λc).
+        V/U, Δp⁺ and γ_max) with the pointwise residual max|u − V e_x| below ``residual_tol``;
+        with ``valley`` (long vesicles) carrier levels 16, 32, ... below ``max_modes`` − 8 and
+        the pair (``max_modes`` − 8, ``max_modes``), the last with the density re-built on the
+        shape of the one before. Default ``max_modes``: 40, or for a long vesicle about 6 modes
+        per tube radius of its estimated length ℓ ≈ ℓc λ/λc (Chen et al. 2020 eq. sL): 64 at
+        (0.6, 0.98 λc).
     order : int
         Gauss nodes per panel.
     xtol, max_iter : float, int
@@ -557,6 +570,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         sequence = [max(6, round(2 * n_modes / 3)), n_modes]
     else:
         sequence = list(range(16, max_modes + 1, 8))
+        if valley and max_modes >= 32:              # carriers every 16 modes, then the pair
+            sequence = list(range(16, max_modes - 15, 16)) + [max_modes - 8, max_modes]
     seed_source = "initial"
     rung_log = {}
     density_terms = int(check_range("density_terms", density_terms, 1, 64))
@@ -612,13 +627,22 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     levels, timings, iterations = [], {}, dict(rung_log)
     message = ""
     prev = seed
-    for n in sequence:
+    # in a long vesicle's automatic ladder the levels below the refinement pair only carry the
+    # lubrication seed to the physical branch: one difference Jacobian each, no pair test
+    # (at (0.6, 1.94) the pair's V/U, dp+ and gamma_max are those of the full ladder to 2e-6)
+    pair_from = len(sequence) - 2 if valley and n_modes is None else 0
+    for i, n in enumerate(sequence):
         disc = vesicle_discretisation(n, order)
         t0 = time.perf_counter()
+        if pair_from and i == len(sequence) - 1 and density != "uniform":
+            # the density re-built on the BEM shape of the pair's first level (it resolves the
+            # rear film neck, which the lubrication shape's density does not)
+            prev = fit_curve(prev.sample, 0.0, 1.0, n,
+                             density=_DENSITIES[density](prev, density_terms))
         try:
             st, op, info = _solve_level(nu, lam, ca_b, disc, prev, n, xtol=xtol,
                                         max_iter=max_iter, seed_level=not levels,
-                                        valley=valley)
+                                        valley=valley, carrier=i < pair_from)
         except InvalidParameterError as exc:
             message = f"level with {n} modes: {exc}"
             break
@@ -638,7 +662,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             log.info("solve_vesicle: level with %d modes unfinished (%s); refining", n,
                      info["message"])
         prev = st["curve"]
-        if len(levels) >= 2:
+        if i > pair_from:
             c, f = levels[-2][2], levels[-1][2]
             if (all(abs(f[k] - c[k]) <= tol * abs(f[k]) for k in _KEYS)
                     and f["residual"] <= residual_tol):
@@ -697,6 +721,78 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         refinement=history, seed=seed_source, iterations=iterations, timings=timings,
         modes=curve.modes.copy(), density=np.asarray(curve.density).copy(),
         tension_modes=np.asarray(st["g"]).copy(), **prof)
+
+
+def mode_convergence(result, modes, *, density: str | None = "bend", density_terms: int = 16,
+                     xtol: float = 1e-9, max_iter: int = 40, progress=None) -> list[dict]:
+    r"""Mesh-convergence study of a steady vesicle at a *fixed* parametrisation density.
+
+    The arc-length density (with it the panel breaks) is part of the discretisation: the
+    levels of :func:`solve_vesicle` each carry the density of their seed, and a long vesicle's
+    default density is built on the lubrication shape, which does not resolve the BEM shape's
+    rear film neck (at (0.6, 1.94), 64 modes: residual 2.7e-3 against 7.7e-4 with the density
+    built on the BEM shape). Here the density is built once on ``result``'s shape and every
+    level in ``modes`` (solved in the given order, each started from the previous one, the
+    first from ``result``) is a Levenberg–Marquardt minimum with that density
+    (:func:`bem.newton.valley_levenberg_marquardt`, full Jacobian budget), so the successive
+    differences measure the discretisation error alone.
+
+    Parameters
+    ----------
+    result : VesicleResult
+        A solved vesicle (its shape seeds the first level; its density is re-built on it).
+    modes : sequence of int
+        Shape modes of the levels (8 to 256 each), e.g. (56, 64, 72, 80).
+    density : {"bend", "curvature", "film"} or None
+        Density built on ``result``'s shape; None keeps ``result``'s own density.
+    density_terms, xtol, max_iter
+        As in :func:`solve_vesicle`.
+    progress : callable, optional
+        Called with each finished row (e.g. ``print``).
+
+    Returns
+    -------
+    list of dict
+        One row per level: ``modes``, ``V_over_U``, ``dp_plus_R0``, ``tension_max``,
+        ``film_min``, ``ell``, ``residual``, ``evaluations``, ``seconds``, ``success``,
+        ``message``; from the third row on ``ratio_<key>`` =
+        :math:`|q_k - q_{k-1}|/|q_{k-1} - q_{k-2}|` for V/U, Δp⁺ and γ_max (the observed
+        contraction per level: a constant ratio ρ < 1 is geometric (spectral) convergence,
+        and the error of the last level is about ρ/(1 - ρ) times its last difference).
+    """
+    from .results import VesicleResult
+
+    if not isinstance(result, VesicleResult) or result.modes.size == 0:
+        raise InvalidParameterError("result", type(result).__name__,
+                                    "a VesicleResult with a shape")
+    if density is not None and density not in _DENSITIES:
+        raise InvalidParameterError("density", density, '"bend", "curvature", "film" or None')
+    levels = [int(check_range("modes", n, 8, 256)) for n in modes]
+    if not levels:
+        raise InvalidParameterError("modes", modes, "at least one mode count")
+    prev = result.curve()
+    dens = prev.density if density is None else \
+        _DENSITIES[density](prev, int(check_range("density_terms", density_terms, 1, 64)))
+    rows = []
+    for n in levels:
+        seed = fit_curve(prev.sample, 0.0, 1.0, n, density=dens)
+        t0 = time.perf_counter()
+        st, op, info = _solve_level(result.nu, result.lam, result.ca_b,
+                                    vesicle_discretisation(n), seed, n, xtol=xtol,
+                                    max_iter=max_iter, valley=True)
+        out = _outputs(result.nu, result.lam, op, st)
+        row = {"modes": n, **{k: out[k] for k in (*_KEYS, "film_min", "ell", "residual")},
+               "evaluations": info["evaluations"], "seconds": time.perf_counter() - t0,
+               "success": info["success"], "message": info["message"]}
+        if len(rows) >= 2:
+            for k in _KEYS:
+                d0 = rows[-1][k] - rows[-2][k]
+                row[f"ratio_{k}"] = abs(row[k] - rows[-1][k]) / abs(d0) if d0 else math.nan
+        rows.append(row)
+        prev = st["curve"]
+        if progress is not None:
+            progress(row)
+    return rows
 
 
 def _profile(curve: SpectralCurve, g, n: int = 201) -> dict:

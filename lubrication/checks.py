@@ -57,6 +57,8 @@ def _fmt(value) -> str:
     arr = np.asarray(value, dtype=float) if not isinstance(value, np.ndarray) else value
     if arr.ndim == 0:
         return f"{float(arr):.6g}"
+    if arr.size == 0:
+        return f"an empty array of shape {arr.shape}"
     return f"{float(arr.flat[0]):.6g} (first offending element of an array of shape {arr.shape})"
 
 

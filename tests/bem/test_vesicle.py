@@ -7,6 +7,7 @@ tension in eta U. Measured numbers in the comments come from this solver (16-poi
 import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -43,6 +44,22 @@ REF_09_10 = {"V_over_U": 1.2574636, "dp_plus_R0": 13.716092}
 def test_bad_input_is_rejected_before_any_work(kwargs, exc):
     with pytest.raises(exc):
         solve_vesicle(**kwargs)
+
+
+def test_mode_convergence_rejects_bad_input():
+    from bem.vesicle import mode_convergence
+    shaped = VesicleResult(nu=0.9, lam=1.0, lam_c=critical_confinement(0.9), ca_b=50.0,
+                           success=True, message="", modes=np.zeros(8))
+    with pytest.raises(InvalidParameterError, match="result"):
+        mode_convergence("not a result", (16,))
+    with pytest.raises(InvalidParameterError, match="result"):
+        mode_convergence(replace(shaped, modes=np.empty(0)), (16,))
+    with pytest.raises(InvalidParameterError, match="modes"):
+        mode_convergence(shaped, (4,))
+    with pytest.raises(InvalidParameterError, match="modes"):
+        mode_convergence(shaped, ())
+    with pytest.raises(InvalidParameterError, match="density"):
+        mode_convergence(shaped, (16,), density="gap")
 
 
 def test_cli_bad_input_exits_2(capsys):
@@ -311,3 +328,27 @@ def test_near_critical_discrepancy_with_lubrication_shrinks():
         assert 0 < res.film_min < 1 - ratio
         err.append(res.dp_plus_R0 / lub.dp_plus_R0 - 1)
     assert 0 < err[1] < err[0] < 0.1, err          # lubrication is the limit: the gap closes
+
+
+@pytest.mark.slow          # ~6 min (three 64-80-mode minima)
+def test_mode_convergence_is_geometric_at_nu_0p6_lam_1p94():
+    """(0.6, 1.94), lam/lam_c = 0.979, Ca_B = 50 (issue 6): with the density built once on the
+    default 64-mode BEM shape (stored) the levels 64, 72, 80 converge geometrically. Measured
+    (docs/validation.md): V/U 1.0209209, 1.0208119, 1.0207880 (ratio of successive
+    differences 0.22), gamma_max 999.60, 1007.30, 1009.85 (0.33), dp+R0 1778.211, 1778.395,
+    1778.364 (0.17), residual 7.7e-4, 3.9e-4, 1.9e-4. Asserted: contraction below 0.5 per +8
+    modes in V/U and gamma_max, a residual that falls by > 1.5x per level, dp+ settled to 1e-4."""
+    from bem.vesicle import mode_convergence
+
+    data = json.loads((Path(__file__).parent / "data" /
+                       "vesicle_nu0.6_lam1.94_64modes.json").read_text())
+    seed = VesicleResult(nu=data["nu"], lam=data["lam"], lam_c=data["lam_c"],
+                         ca_b=data["ca_b"], success=False, message="stored default shape",
+                         modes=np.array(data["modes"]), density=np.array(data["density"]))
+    rows = mode_convergence(seed, (64, 72, 80))
+    assert all(r["success"] for r in rows), [r["message"] for r in rows]
+    last = rows[-1]
+    assert last["ratio_V_over_U"] < 0.5 and last["ratio_tension_max"] < 0.5, last
+    assert rows[1]["residual"] < rows[0]["residual"] / 1.5
+    assert rows[2]["residual"] < rows[1]["residual"] / 1.5
+    assert abs(last["dp_plus_R0"] - rows[1]["dp_plus_R0"]) < 1e-4 * last["dp_plus_R0"]
