@@ -274,7 +274,8 @@ def test_parachute_bullet_transition_at_nu_0p9_near_chen_line():
 def test_parachute_bullet_transition_at_nu_0p7_near_chen_line():
     """nu = 0.7 (long: l_c lam/lam_c ~ 6.4): parachute at lam = 1.46 (rear curvature +0.1315),
     bullet at 1.48 (-0.1158), 32 modes each (residual 4.3e-4, 2.5e-4), so lam_T = 1.4706
-    against Chen et al. 2020 eq. transition 1.469 (+0.1 %). Asserted within 5 %, as at nu = 0.9."""
+    against Chen et al. 2020 eq. transition 1.469 (+0.1 %), measured with the earlier 8-mode
+    ladder (the carrier ladder now ends at 40 modes). Asserted within 5 %, as at nu = 0.9."""
     from correlations.shape import transition_confinement_chen2020
     a = solve_vesicle(0.7, 1.46, tol=1e-2, residual_tol=5e-3)
     b = solve_vesicle(0.7, 1.48, tol=1e-2, residual_tol=5e-3)
@@ -294,7 +295,7 @@ def test_parachute_bullet_transition_at_nu_0p6_near_chen_line():
     ~7 %; a third solve at 1.81, rear curvature +0.043, narrows it to 1.812). Asserted within
     5 %, as at nu = 0.9; the gap at lam_T between 5 and 7 % of R."""
     from correlations.shape import transition_confinement_chen2020
-    # both stop at 56 modes (measured; 1.78's last pair differs by 1.2 % in dp+)
+    # 56 and 64 modes (carrier ladder; with the earlier 8-mode ladder both stopped at 56)
     a = solve_vesicle(0.6, 1.78, tol=2e-2, residual_tol=5e-3)
     b = solve_vesicle(0.6, 1.84, tol=1e-2, residual_tol=5e-3)
     assert a.success and b.success, (a.message, b.message)

@@ -18,7 +18,8 @@ and at nu = 0.6 (default modes, "bend" density):
 Long vesicles (nu < ~0.75) use the "bend" arc-length density, start from the lubrication
 shape at their own lam and are solved by the valley Levenberg–Marquardt (bem.vesicle); their
 near-lam_c solves are not converged to the default tolerances (nu = 0.6, lam = 1.94, 64 modes:
-residual 2.7e-3, V/U still moving by 1.2e-3 per +8 modes, gamma_max by 9 %,
+residual 1.3e-3; the refinement pair, 56 modes on the lubrication-shape density and 64 on the
+density re-built on the BEM shape, differs by 1.8e-3 in V/U and 14 % in gamma_max,
 docs/validation.md), so below nu = 0.85 the refinement pair is accepted within 5 % in V/U and
 dp+ (gamma_max not required) and V/U is asserted within 0.5 %; above, within 1 % and 0.1 %,
 where the 48-mode solves are converged to ~1e-4 in V/U.
