@@ -129,6 +129,7 @@ class VesicleOperator(DropOperator):
         self.n_tension = int(n_tension or disc.n_modes)
         modes = reference.with_modes(disc.n_modes)
         self.area_mode = self._pick_area_mode(modes) if area_mode is None else int(area_mode)
+        self._area_slope = 0.0                      # dA/dc of the last secant (curve)
 
     def _raw_curve(self, modes) -> SpectralCurve:
         return SpectralCurve.closed(modes, volume=self.volume, centroid=0.0,
@@ -156,7 +157,7 @@ class VesicleOperator(DropOperator):
         f0 = c.area() - self.area
         if abs(f0) < 1e-14 * self.area:
             return c
-        slope = getattr(self, "_area_slope", 0.0)
+        slope = self._area_slope
         x1 = x0 - f0 / slope if slope else x0 + 1e-4 * max(1.0, abs(x0))
         for _ in range(40):
             m[j] = x1
