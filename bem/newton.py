@@ -123,28 +123,10 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
     mu = 1e-8
     success, message, step, it = False, "", math.inf, 0
     for it in range(1, max_iter + 1):
-        JTJ = J.T @ J
-        g = J.T @ F
-        D = np.diag(np.maximum(np.diag(JTJ), 1e-300))
-        accepted = False
-        for _ in range(10):
-            delta = -np.linalg.solve(JTJ + mu * D, g)
-            z_new = z + delta
-            try:
-                F_new, pl_new = fun(z_new)
-            except InvalidParameterError:
-                n_eval += 1
-                mu = max(10.0 * mu, 1e-4)
-                continue
-            n_eval += 1
-            norm_new = float(np.linalg.norm(F_new))
-            if norm_new < norm * (1.0 + 1e-12):
-                accepted = True
-                break
-            if not fresh:
-                break
-            mu = max(10.0 * mu, 1e-4)
-        if not accepted:
+        # a Broyden Jacobian's rejected step is not damped further: a fresh one is made
+        delta, F_new, pl_new, mu, n = _damped_step(fun, z, J, F, norm, mu, fresh)
+        n_eval += n
+        if F_new is None:
             if not fresh and n_jac < max_jacobians:
                 J, n = difference_jacobian(fun, z, F, fd_step, exact(payload))
                 n_eval += n
@@ -170,6 +152,7 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
                            f"{mu:.1e} (residual norm {norm:.2e})")
             break
         step = float(np.max(np.abs(delta) / np.maximum(1.0, np.abs(z))))
+        norm_new = float(np.linalg.norm(F_new))
         ratio = norm_new / norm if norm > 0 else 0.0
         Jd = J @ delta
         predicted = float(np.linalg.norm(F + Jd)) / norm if norm > 0 else 0.0
@@ -177,7 +160,7 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
         for j, col in exact(pl_new).items():
             J[:, j] = col
         was_fresh, fresh = fresh, False
-        z, F, payload, norm = z_new, F_new, pl_new, norm_new
+        z, F, payload, norm = z + delta, F_new, pl_new, norm_new
         mu = max(mu / 10.0, 1e-12)
         history.append(norm)
         log.debug("levenberg_marquardt it %d: |F| = %.3e (ratio %.2f, model %.2f), step %.2e, "
@@ -216,6 +199,30 @@ def _directional_update(fun, z, F, J, Q, fd_step):
             n_eval += 1
             JQ[:, i] = (F - fun(z - h * Q[:, i])[0]) / h
     return J + (JQ - J @ Q) @ Q.T, n_eval
+
+
+def _damped_step(fun, z, J, F, norm, mu, keep_damping):
+    """Levenberg–Marquardt step with Marquardt's diagonal scaling (Marquardt 1963): up to 10
+    trials, μ multiplied by 10 (at least 1e-4) after a shape the operator rejects
+    (InvalidParameterError) or, if ``keep_damping``, after one that does not decrease |F|.
+    Returns (delta, F_new, payload, mu, evaluations); F_new is None when no trial was
+    accepted."""
+    JTJ = J.T @ J
+    g = J.T @ F
+    D = np.diag(np.maximum(np.diag(JTJ), 1e-300))
+    for trial in range(1, 11):
+        delta = -np.linalg.solve(JTJ + mu * D, g)
+        try:
+            F_new, pl_new = fun(z + delta)
+        except InvalidParameterError:
+            mu = max(10.0 * mu, 1e-4)
+            continue
+        if np.linalg.norm(F_new) < norm * (1.0 + 1e-12):
+            return delta, F_new, pl_new, mu, trial
+        if not keep_damping:
+            break
+        mu = max(10.0 * mu, 1e-4)
+    return delta, None, None, mu, trial
 
 
 def _promised(J, F, norm):
@@ -280,17 +287,8 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
             return None, None
 
     for it in range(1, max_iter + 1):
-        JTJ = J.T @ J
-        g = J.T @ F
-        D = np.diag(np.maximum(np.diag(JTJ), 1e-300))
-        F_new = None
-        for _ in range(10):
-            delta = -np.linalg.solve(JTJ + mu * D, g)
-            F_new, pl_new = evaluate(z + delta)
-            if F_new is not None and np.linalg.norm(F_new) < norm * (1.0 + 1e-12):
-                break
-            F_new = None
-            mu = max(10.0 * mu, 1e-4)
+        delta, F_new, pl_new, mu, n = _damped_step(fun, z, J, F, norm, mu, True)
+        n_eval += n
         if F_new is None:
             if not fresh and n_jac < max_jacobians:
                 J, fresh = fresh_jacobian(), True
