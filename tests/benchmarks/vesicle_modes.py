@@ -14,13 +14,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import tempfile
 import time
 from pathlib import Path
 
 from bem.results import provenance
 from bem.vesicle import mode_convergence, solve_vesicle
+from lubrication.io import atomic_write
 
 
 def _fmt(row: dict) -> str:
@@ -53,10 +52,7 @@ def main() -> None:
         doc = {"nu": args.nu, "lam": args.lam, "ca_b": args.ca_b, "modes": modes,
                "density": "bend, built on the default solve's shape", "rows": rows,
                "default_solve": base.to_dict(shape=False), "provenance": provenance()}
-        with tempfile.NamedTemporaryFile("w", dir=out.parent or ".", delete=False,
-                                         suffix=".tmp") as fh:
-            json.dump(doc, fh, indent=1, default=str)
-        os.replace(fh.name, out)                     # never a half-written file
+        atomic_write(out, lambda f: json.dump(doc, f, indent=1, default=str))
 
 
 if __name__ == "__main__":
