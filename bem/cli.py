@@ -1,7 +1,7 @@
 """``vesicle-tube bem ...``: the boundary element solvers on the command line.
 
 Registered by :func:`correlations.cli.build_parser` through :func:`add_bem_parser`; the contract
-is the one of :mod:`correlations.cli` (table for people, one JSON object with ``--json``, exit
+is the one of :mod:`lubrication.cli_contract` (table for people, one JSON object with ``--json``, exit
 0 / 2 invalid input with one line on stderr / 1 not converged with the JSON still printed and
 ``"converged": false``). This module imports only the standard library at import time: numba,
 numpy and matplotlib load inside the command functions, so that ``vesicle-tube estimate`` stays
@@ -23,7 +23,7 @@ __all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere", "cmd_bem_vesicle"
 
 def cmd_bem_sphere(args):
     """Free rigid sphere of radius lam R on the axis of Poiseuille flow."""
-    from correlations.cli import format_rows
+    from lubrication.cli_contract import format_rows
 
     from .solve import solve_sphere
     res = solve_sphere(args.lam, panels=args.panels, tol=args.tol)
@@ -58,10 +58,10 @@ def _shape_result_json(res, subcommand: str, args) -> dict:
 def _plot_shape(res, args) -> None:
     """--plot FILE: the body's shape in the tube."""
     if args.plot:
-        from correlations.cli import _save_plot
+        from lubrication.cli_contract import save_plot
 
         from .plotting import plot_shape
-        _save_plot(plot_shape(res), args.plot)
+        save_plot(plot_shape(res), args.plot)
 
 
 def _method_and_error(res):
@@ -78,7 +78,7 @@ def _method_and_error(res):
 
 def cmd_bem_drop(args):
     """Steady clean drop (viscosity ratio 1, constant tension) on the axis."""
-    from correlations.cli import format_rows
+    from lubrication.cli_contract import format_rows
 
     from .drop import solve_drop
     res = solve_drop(args.lam, args.ca, n_modes=args.modes, tol=args.tol)
@@ -105,7 +105,7 @@ def cmd_bem_drop(args):
 
 def cmd_bem_vesicle(args):
     """Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the axis."""
-    from correlations.cli import format_rows
+    from lubrication.cli_contract import format_rows
 
     from .vesicle import solve_vesicle
     res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
@@ -143,7 +143,7 @@ def _sweep_values(args):
     """The confinements of ``--lam A B N`` or ``--lam-ratio A B N`` (N points, A to B)."""
     import numpy as np
 
-    from correlations.cli import UsageError
+    from lubrication.cli_contract import UsageError
     option, (a, b, n) = (("--lam", args.lam) if args.lam is not None
                          else ("--lam-ratio", args.lam_ratio))
     if not (math.isfinite(n) and n.is_integer() and n >= 2):
@@ -154,7 +154,7 @@ def _sweep_values(args):
 
 def cmd_bem_vesicle_sweep(args):
     """Steady vesicles over a range of confinements at fixed nu (continuation in lam)."""
-    from correlations.cli import format_rows
+    from lubrication.cli_contract import format_rows
 
     from .sweep import save_sweep, sweep_table, sweep_vesicle
     points = _sweep_values(args)
@@ -183,10 +183,10 @@ def cmd_bem_vesicle_sweep(args):
     if args.out:
         out["files"] = [str(p) for p in save_sweep(args.out, results, solver)]
     if args.plot:
-        from correlations.cli import _save_plot
+        from lubrication.cli_contract import save_plot
 
         from .plotting import plot_vesicle_sweep
-        _save_plot(plot_vesicle_sweep(results), args.plot)
+        save_plot(plot_vesicle_sweep(results), args.plot)
     rows = [(f"lam = {t['lam']:.5g} (lam/lam_c = {t['lam_ratio']:.4f})", t["V_over_U"], "V/U",
              f"dp+R0/(eta U) = {t['dp_plus_R0']:.4g}, h/R = {t['film_min']:.3g}, "
              f"L/R = {t['ell']:.3g}, {t['shape_class']}, {t['runtime']:.0f} s"
@@ -225,10 +225,10 @@ def _vesicle_options(p, sweep: bool) -> None:
 
 def add_bem_parser(subparsers) -> None:
     """Add ``bem sphere``, ``drop``, ``vesicle`` and ``vesicle-sweep`` to the subcommands."""
-    from correlations.cli import _Parser
+    from lubrication.cli_contract import Parser
     logging.getLogger("bem").addHandler(logging.NullHandler())
     b = subparsers.add_parser("bem", help="boundary element solvers: rigid sphere, clean drop, vesicle")
-    sub = b.add_subparsers(dest="bem_command", required=True, parser_class=_Parser)
+    sub = b.add_subparsers(dest="bem_command", required=True, parser_class=Parser)
 
     s = sub.add_parser("sphere", help="free rigid sphere on the axis of Poiseuille flow")
     s.add_argument("--lam", type=float, required=True, metavar="A_OVER_R",

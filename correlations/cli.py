@@ -1,10 +1,9 @@
 """The ``vesicle-tube`` command line.
 
-Contract (every command follows it): ``vesicle-tube COMMAND [options] [--json]``. People get a
-table with units; ``--json`` prints one JSON object on stdout. Exit status 0 on success, 2 on
-invalid input (one line on stderr naming the parameter, its value and the valid range), 1 when a
-solver did not converge (with ``--json`` the object is still printed, ``"converged": false``).
-Out-of-range warnings go to stderr, one line each, and into the JSON under ``"warnings"``.
+Every command follows the contract of :mod:`lubrication.cli_contract` (table or strict JSON;
+exit 0 ok, 2 invalid input, 1 not converged, 130 interrupted). Out-of-range warnings go to
+stderr, one line each, and into the JSON under ``"warnings"``; the files a command wrote are
+named on stderr.
 
 Heavy imports (matplotlib, scipy, numba) happen only inside the commands that need them, so that
 ``vesicle-tube estimate`` starts fast.
@@ -13,14 +12,14 @@ Heavy imports (matplotlib, scipy, numba) happen only inside the commands that ne
 from __future__ import annotations
 
 import argparse
-import json
-import math
 import sys
 import warnings
 
 from lubrication.checks import InvalidParameterError, OutOfRangeWarning, check_positive
-
-EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INVALID = 0, 1, 2
+from lubrication.cli_contract import (EXIT_INTERRUPTED, EXIT_INVALID, EXIT_NOT_CONVERGED, EXIT_OK,
+                                      Parser, UsageError, check_output_dir, check_plot_path,
+                                      dump_json, format_rows, interrupted_message,
+                                      non_finite_keys, quiet_broken_pipe, save_plot)
 
 # Human labels of the output keys (key -> label); keys not listed are printed as they are.
 LABELS = {
@@ -46,41 +45,6 @@ ESTIMATE_ROWS = ("nu", "lam", "lam_c", "delta", "ell_c", "passes", "R0_um", "d_c
                  "discharge_hematocrit", "eta_rel")
 
 
-class UsageError(Exception):
-    """Options given in a combination the command does not accept (exit status 2)."""
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse with the contract's one-line error and exit status 2."""
-
-    def error(self, message):
-        self.exit(EXIT_INVALID, f"{self.prog}: error: {message}\n")
-
-
-def _fmt(value) -> str:
-    if value is None:
-        return "—"
-    if isinstance(value, bool):
-        return "yes" if value else "NO"
-    if isinstance(value, float):
-        return f"{value:.4g}" if math.isfinite(value) else str(value)
-    return str(value)
-
-
-def format_rows(rows, title: str = "") -> str:
-    """Fixed-width table of (label, value, unit, method, flag) rows."""
-    head = ("quantity", "value", "unit", "method", "")
-    cells = [head] + [tuple(_fmt(c) if i == 1 else ("" if c is None else str(c))
-                            for i, c in enumerate(r)) for r in rows]
-    widths = [max(len(r[i]) for r in cells) for i in range(4)]
-    lines = [title] if title else []
-    for k, r in enumerate(cells):
-        lines.append("  ".join(c.ljust(w) for c, w in zip(r[:4], widths)) + ("  " + r[4] if r[4] else ""))
-        if k == 0:
-            lines.append("  ".join("-" * w for w in widths))
-    return "\n".join(lines)
-
-
 def _quantity_rows(quantities: dict, keys) -> list:
     rows = []
     for key in keys:
@@ -92,20 +56,6 @@ def _quantity_rows(quantities: dict, keys) -> list:
             flag = "no valid method" if q.note.startswith("no valid") else q.note
         rows.append((LABELS.get(key, key), q.value, q.unit, q.method or "", flag))
     return rows
-
-
-def _emit(obj: dict, args, human: str) -> None:
-    if args.json:
-        print(json.dumps(obj, indent=2, default=_json_default, ensure_ascii=False))
-    else:
-        print(human)
-
-
-def _json_default(x):
-    try:
-        return x.tolist()
-    except AttributeError:
-        return str(x)
 
 
 # --------------------------------------------------------------------------- commands
@@ -178,7 +128,7 @@ def cmd_estimate(args) -> dict:
                       ["methods and validity ranges: correlations/registry.py, docs/user-guide.md"])
     if args.plot:
         from .plotting import plot_estimate
-        _save_plot(plot_estimate(est), args.plot)
+        save_plot(plot_estimate(est), args.plot)
     return out, human
 
 
@@ -206,7 +156,7 @@ def cmd_viscosity(args) -> dict:
             (LABELS["eta_rel"], eta, "-", law, "")]
     if args.plot:
         from .plotting import plot_relative_viscosity
-        _save_plot(plot_relative_viscosity(hematocrits=(h_d,)), args.plot)
+        save_plot(plot_relative_viscosity(hematocrits=(h_d,)), args.plot)
     return out, format_rows(rows, f"Relative apparent viscosity ({law})")
 
 
@@ -262,24 +212,14 @@ def cmd_fahraeus(args) -> dict:
     return out, format_rows(rows, f"Fahraeus effect in a {d:g} um tube")
 
 
-def _save_plot(ax, path: str) -> None:
-    """Write the figure of ``ax`` atomically (temporary file, then rename)."""
-    import os
-    from lubrication.io import atomic_write
-    fmt = os.path.splitext(path)[1].lstrip(".") or "png"
-    atomic_write(path, lambda f: ax.figure.savefig(f, format=fmt, dpi=150, bbox_inches="tight"),
-                 binary=True)
-    print(f"figure written to {path}", file=sys.stderr)
-
-
 # --------------------------------------------------------------------------- parser
 
 def build_parser() -> argparse.ArgumentParser:
     from .estimate import RBC_DEFAULTS
     from .registry import SOLVERS
-    p = _Parser(prog="vesicle-tube", description="Vesicles and red blood cells in narrow tubes "
+    p = Parser(prog="vesicle-tube", description="Vesicles and red blood cells in narrow tubes "
                 "(Stokes flow): geometry, engineering estimates, apparent viscosity.")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
 
     def common(sp):
         sp.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -351,23 +291,64 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+def _prog(args) -> str:
+    """``vesicle-tube COMMAND [SUBCOMMAND]`` for messages."""
+    sub = getattr(args, "bem_command", None)
+    return " ".join(["vesicle-tube", args.command] + ([sub] if sub else []))
+
+
+def _check_outputs(args) -> None:
+    """Every output option is checked before any work: the folder of ``--out`` and the folder
+    and format of ``--plot``."""
+    check_output_dir("--out", getattr(args, "out", None))
+    check_plot_path("--plot", getattr(args, "plot", None))
+
+
+def _run(args) -> int:
+    """Run the command of ``args`` under the contract of :mod:`lubrication.cli_contract`."""
+    from lubrication.io import forget_written_files, written_files
+    prog = _prog(args)
+    forget_written_files()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", OutOfRangeWarning)
         try:
+            _check_outputs(args)
             out, human = args.func(args)
         except (InvalidParameterError, UsageError) as exc:
-            print(f"vesicle-tube {args.command}: error: {exc}", file=sys.stderr)
+            print(f"{prog}: error: {exc}", file=sys.stderr)
             return EXIT_INVALID
+    bad = non_finite_keys(out)
+    if bad:     # a safety net: every command reports missing values as None, never NaN/inf
+        print(f"{prog}: error: the result has non-finite values ({', '.join(bad[:5])}): the "
+              "computation overflowed or failed; no numbers are reported", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
     messages = out.get("warnings", []) + [str(w.message) for w in caught
                                           if issubclass(w.category, OutOfRangeWarning)]
     for m in messages:
         print(f"warning: {m}", file=sys.stderr)
     if messages:
         out["warnings"] = messages
-    _emit(out, args, human)
-    return EXIT_OK if out.get("converged", True) else EXIT_NOT_CONVERGED
+    for path in written_files():
+        print(f"wrote {path}", file=sys.stderr)
+    print(dump_json(out) if args.json else human, flush=True)
+    converged = out.get("converged", True)
+    if not converged and out.get("message"):
+        print(f"{prog}: not converged: {out['message']}", file=sys.stderr)
+    return EXIT_OK if converged else EXIT_NOT_CONVERGED
+
+
+def main(argv=None) -> int:
+    """Entry point of ``vesicle-tube``: exit status per :mod:`lubrication.cli_contract`."""
+    prog = "vesicle-tube"
+    try:
+        args = build_parser().parse_args(argv)
+        prog = _prog(args)
+        return _run(args)
+    except KeyboardInterrupt:
+        print(interrupted_message(prog), file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        return quiet_broken_pipe()
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ error: the caller gets the extrapolated number and is told so.
 from __future__ import annotations
 
 import math
+import time
 import warnings
 from dataclasses import dataclass
 
@@ -26,6 +27,7 @@ __all__ = [
     "check_fraction",
     "check_choice",
     "scalar_or_array",
+    "Deadline",
 ]
 
 
@@ -196,3 +198,30 @@ class ValidityRange:
         """One line, e.g. ``0.6 <= nu <= 0.93, 0.6 <= lam <= 1.81 (Chen et al. 2020)``."""
         box = ", ".join(f"{lo:g} <= {name} <= {hi:g}" for name, lo, hi in self.bounds)
         return f"{box} ({self.source})"
+
+
+class Deadline:
+    """A wall-time budget for a solve (``max_time`` seconds from creation; None: no limit).
+
+    Solvers test :meth:`expired` between iterations and, when it is, stop and return an
+    unconverged result whose message names the limit; they never raise for it.
+
+    Examples
+    --------
+    >>> Deadline(None).expired(), Deadline(3600.0).expired()
+    (False, False)
+    """
+
+    def __init__(self, max_time: float | None):
+        if max_time is not None:
+            max_time = float(check_positive("max_time", max_time))
+        self.max_time = max_time
+        self._end = None if max_time is None else time.monotonic() + max_time
+
+    def expired(self) -> bool:
+        """True once the budget is spent."""
+        return self._end is not None and time.monotonic() > self._end
+
+    def message(self) -> str:
+        """The reason an expired solve gives."""
+        return f"stopped at the time limit max_time={self.max_time:g} s before converging"

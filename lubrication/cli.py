@@ -1,6 +1,6 @@
 """``vesicle-tube lubrication``: one steady solution or a sweep over lam/lam_c.
 
-Follows the CLI contract of :mod:`correlations.cli` (table or ``--json``; exit 0 ok, 2 invalid
+Follows the CLI contract of :mod:`lubrication.cli_contract` (table or ``--json``; exit 0 ok, 2 invalid
 input, 1 not converged with the JSON still printed). scipy is imported only when the command
 runs, so registering the command costs nothing at start-up.
 """
@@ -53,7 +53,7 @@ def add_parser(sub) -> None:
 
 
 def cmd_lubrication(args):
-    from correlations.cli import UsageError, format_rows
+    from lubrication.cli_contract import UsageError, format_rows
     if args.sweep:
         if args.lam is not None or args.lam_ratio is not None:
             raise UsageError("--sweep takes --from/--to/--points, not --lam or --lam-ratio")
@@ -67,9 +67,9 @@ def cmd_lubrication(args):
         paths = res.save(args.out)
         out["files"] = [str(p) for p in paths]
     if args.plot and res.success:
-        from correlations.cli import _save_plot
+        from lubrication.cli_contract import save_plot
         from .plotting import plot_shape
-        _save_plot(plot_shape(res), args.plot)
+        save_plot(plot_shape(res), args.plot)
     rows = [(k, out.get(k), unit, "lubrication model", "") for k, unit in ROWS]
     title = (f"Lubrication model ({res.model}): "
              + ("converged" if res.success else "NOT CONVERGED") + f" - {res.message}")
@@ -79,7 +79,7 @@ def cmd_lubrication(args):
 def _sweep(args):
     import numpy as np
 
-    from correlations.cli import UsageError, format_rows
+    from lubrication.cli_contract import UsageError, format_rows
     from .solve import sweep_lubrication
     if args.points < 2:
         raise UsageError(f"--points {args.points}: a sweep needs at least 2 points")
@@ -95,9 +95,9 @@ def _sweep(args):
     if args.out:
         out["files"] = [str(_write_sweep_csv(Path(args.out), results, table))]
     if args.plot:
-        from correlations.cli import _save_plot
+        from lubrication.cli_contract import save_plot
         from .plotting import plot_sweep
-        _save_plot(plot_sweep(results), args.plot)
+        save_plot(plot_sweep(results), args.plot)
     rows = [(f"lam/lam_c = {t['lam_ratio']:.4f}", t["V_over_U"], "V/U",
              f"dp+R0/(eta U) = {t['dp_plus_R0']:.4g}, h/R = {t['film_min']:.3g}, L/R = {t['ell']:.3g}"
              if t["converged"] else "", "" if t["converged"] else "NOT CONVERGED") for t in table]

@@ -12,7 +12,21 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write", "save_result"]
+__all__ = ["atomic_write", "save_result", "written_files", "forget_written_files"]
+
+# Every file completed by atomic_write in this process, in order: the command line names them
+# after a run, and after an interrupt (each of them is complete).
+_WRITTEN: list[Path] = []
+
+
+def written_files() -> list[Path]:
+    """The files :func:`atomic_write` has completed in this process (oldest first, no repeats)."""
+    return list(dict.fromkeys(_WRITTEN))
+
+
+def forget_written_files() -> None:
+    """Start a new record of written files (called at the start of each command)."""
+    _WRITTEN.clear()
 
 
 def atomic_write(path, write, *, binary: bool = False) -> Path:
@@ -40,6 +54,7 @@ def atomic_write(path, write, *, binary: bool = False) -> Path:
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
+        _WRITTEN.append(path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
