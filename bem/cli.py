@@ -8,11 +8,20 @@ numpy and matplotlib load inside the command functions, so that ``vesicle-tube e
 fast.
 
 Units: R = 1, U the mean velocity, eta the viscosity; lam = a/R (sphere) or R0/R (drop, R0 the
-radius of the sphere of equal volume), Ca = eta U / gamma.
+radius of the sphere of equal volume), Ca = eta U / gamma. In the tables the "unit" column
+gives the unit or scale of each value ("-" dimensionless, "R", "1/R", "U", "eta U",
+"eta U/R0", "s"); the pressure drop of a vesicle is dp+ in units of eta U/R0 (Chen et al.
+2020), as in the plot title.
+
+Every option is checked before any BEM work (and before numba loads) by the solver module's
+``check_*_inputs``; a value outside its range or outside the solver's resource envelope is
+exit 2 with one line naming the option. A solve that fails prints "—" (JSON null) for every
+physical number.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import sys
@@ -21,33 +30,74 @@ __all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere", "cmd_bem_vesicle"
            "cmd_bem_vesicle_sweep"]
 
 
+#: API parameter -> command-line option, for the messages of invalid input
+_OPTIONS = {"lam": "--lam", "lam_ratio": "--lam-ratio", "lams": "--lam", "lam_ratios":
+            "--lam-ratio", "ca": "--ca", "ca_b": "--ca-b", "nu": "--nu", "panels": "--panels",
+            "tol": "--tol", "residual_tol": "--residual-tol", "n_modes": "--modes",
+            "max_modes": "--max-modes", "max_time": "--max-time"}
+
+
+@contextlib.contextmanager
+def _options_named():
+    """Turn an InvalidParameterError of an input check into a UsageError naming the option."""
+    from lubrication.checks import InvalidParameterError
+    from lubrication.cli_contract import UsageError
+    try:
+        yield
+    except InvalidParameterError as exc:
+        option = _OPTIONS.get(exc.name)
+        if option is None:
+            raise
+        raise UsageError(f"{option}: {exc}") from None
+
+
+def _missing_if_failed(value, converged: bool):
+    """A physical number for a table: None (printed "—") when the solve failed."""
+    return value if converged else None
+
+
 def cmd_bem_sphere(args):
     """Free rigid sphere of radius lam R on the axis of Poiseuille flow."""
     from lubrication.cli_contract import format_rows
 
+    from .solve import check_sphere_inputs
+    with _options_named():
+        check_sphere_inputs(args.lam, panels=args.panels, tol=args.tol, max_time=args.max_time)
     from .solve import solve_sphere
-    res = solve_sphere(args.lam, panels=args.panels, tol=args.tol)
+    res = solve_sphere(args.lam, panels=args.panels, tol=args.tol, max_time=args.max_time)
+    ok = bool(res.converged)
     out = {"command": "bem", "subcommand": "sphere"}
     out.update(res.to_dict())
-    out["converged"] = bool(res.converged)
+    out["converged"] = ok
     out["error_estimate"] = {"V_over_U": res.V_over_U_err, "dp_plus_R": res.dp_plus_R_err,
                              "dp_plus_R0": res.dp_plus_R_err * res.lam, "drag_K": res.drag_K_err}
+    for key in ("V_over_U_err", "dp_plus_R_err", "drag_K_err"):
+        out.pop(key, None)
+    out["error_estimate"] = {k: (v if math.isfinite(v) else None)
+                             for k, v in out["error_estimate"].items()}
     method = f"BEM, {res.panels['body']} panels x {res.panels['order']} nodes"
+
+    def pm(err):
+        return f"± {err:.1e}" if ok and math.isfinite(err) else ""
     rows = [("confinement a/R", res.lam, "-", "input", ""),
-            ("speed V/U", res.V_over_U, "-", method, f"± {res.V_over_U_err:.1e}"),
-            ("extra pressure drop dp+ R/(eta U)", res.dp_plus_R, "-", method,
-             f"± {res.dp_plus_R_err:.1e}"),
-            ("extra pressure drop dp+ a/(eta U)", res.dp_plus_R0, "-", method, ""),
-            ("quiescent-tube drag K = F/(6 pi eta a V)", res.drag_K, "-", method,
-             f"± {res.drag_K_err:.1e}"),
-            ("converged", res.converged, "", "", "" if res.converged else res.message)]
+            ("speed V", _missing_if_failed(res.V_over_U, ok), "U", method,
+             pm(res.V_over_U_err)),
+            ("extra pressure drop dp+", _missing_if_failed(res.dp_plus_R, ok), "eta U/R",
+             method, pm(res.dp_plus_R_err)),
+            ("extra pressure drop dp+", _missing_if_failed(res.dp_plus_R0, ok), "eta U/a",
+             method, ""),
+            ("quiescent-tube drag K = F/(6 pi eta a V)", _missing_if_failed(res.drag_K, ok), "-",
+             method, pm(res.drag_K_err)),
+            ("time", res.timings.get("total_s"), "s", "", ""),
+            ("converged", ok, "", "", "" if ok else res.message)]
     _plot_shape(res, args)
     return out, format_rows(rows, f"Rigid sphere on the axis of Poiseuille flow (BEM), "
                                   f"a/R = {res.lam:g}")
 
 
 def _shape_result_json(res, subcommand: str, args) -> dict:
-    """JSON object of a drop/vesicle result; with --out the files are written and listed."""
+    """JSON object of a drop/vesicle result; with --out the files are written and listed
+    (physical fields null and no profile rows when the solve failed)."""
     out = {"command": "bem", "subcommand": subcommand, **res.to_dict(shape=False),
            "converged": bool(res.success)}
     if args.out:
@@ -72,7 +122,7 @@ def _method_and_error(res):
 
     def pm(key):
         v = err.get(key)
-        return f"± {v:.1e}" if v is not None and math.isfinite(v) else ""
+        return f"± {v:.1e}" if res.success and v is not None and math.isfinite(v) else ""
     return method, pm
 
 
@@ -80,59 +130,81 @@ def cmd_bem_drop(args):
     """Steady clean drop (viscosity ratio 1, constant tension) on the axis."""
     from lubrication.cli_contract import format_rows
 
+    from .drop import check_drop_inputs
+    with _options_named():
+        check_drop_inputs(args.lam, args.ca, n_modes=args.modes, tol=args.tol,
+                          max_time=args.max_time)
     from .drop import solve_drop
-    res = solve_drop(args.lam, args.ca, n_modes=args.modes, tol=args.tol)
+    res = solve_drop(args.lam, args.ca, n_modes=args.modes, tol=args.tol,
+                     max_time=args.max_time)
     out = _shape_result_json(res, "drop", args)
     method, pm = _method_and_error(res)
+    ok = bool(res.success)
 
+    def phys(v):
+        return _missing_if_failed(v, ok)
     rows = [("confinement lam = R0/R", res.lam, "-", "input", ""),
             ("capillary number Ca = eta U/gamma", res.ca, "-", "input", ""),
-            ("speed V/U", res.V_over_U, "-", method, pm("V_over_U")),
-            ("extra pressure drop dp+ R/(eta U)", res.dp_plus_R, "-", method, pm("dp_plus_R")),
-            ("extra pressure drop dp+ R0/(eta U)", res.dp_plus_R0, "-", method, pm("dp_plus_R0")),
-            ("drop length L/R", res.length, "-", method, ""),
-            ("smallest gap 1 - max r/R", res.film, "-", method, ""),
-            ("front curvature", res.curvature_front, "1/R", method, ""),
-            ("rear curvature", res.curvature_rear, "1/R", method, ""),
+            ("speed V", phys(res.V_over_U), "U", method, pm("V_over_U")),
+            ("extra pressure drop dp+", phys(res.dp_plus_R), "eta U/R", method,
+             pm("dp_plus_R")),
+            ("extra pressure drop dp+", phys(res.dp_plus_R0), "eta U/R0", method,
+             pm("dp_plus_R0")),
+            ("drop length L", phys(res.length), "R", method, ""),
+            ("smallest gap 1 - max r", phys(res.film), "R", method, ""),
+            ("front curvature", phys(res.curvature_front), "1/R", method, ""),
+            ("rear curvature", phys(res.curvature_rear), "1/R", method, ""),
             ("steady residual max|u.n - V n_x|", res.residual, "U", method, ""),
             ("volume error", res.volume_error, "-", "panel quadrature", ""),
             ("time", res.timings.get("total_s"), "s", "", ""),
-            ("converged", res.success, "", "", "" if res.success else res.message)]
+            ("converged", ok, "", "", "" if ok else res.message)]
     _plot_shape(res, args)
     return out, format_rows(rows, f"Clean drop, viscosity ratio 1, on the axis of Poiseuille "
                                   f"flow (BEM): lam = {res.lam:g}, Ca = {res.ca:g}")
+
+
+def _vesicle_solver_options(args) -> dict:
+    return {"n_modes": args.modes, "tol": args.tol, "residual_tol": args.residual_tol,
+            "max_modes": args.max_modes}
 
 
 def cmd_bem_vesicle(args):
     """Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the axis."""
     from lubrication.cli_contract import format_rows
 
+    from .vesicle import check_vesicle_inputs
+    with _options_named():
+        check_vesicle_inputs(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
+                             max_time=args.max_time, **_vesicle_solver_options(args))
     from .vesicle import solve_vesicle
     res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
-                        n_modes=args.modes, tol=args.tol, residual_tol=args.residual_tol,
-                        max_modes=args.max_modes)
+                        max_time=args.max_time, **_vesicle_solver_options(args))
     out = _shape_result_json(res, "vesicle", args)
     method, pm = _method_and_error(res)
+    ok = bool(res.success)
 
+    def phys(v):
+        return _missing_if_failed(v, ok)
+    curv = (f"{res.curvature_rear:.4g} / {res.curvature_front:.4g}" if ok else None)
     rows = [("reduced volume nu", res.nu, "-", "input", ""),
             ("confinement lam = R0/R", res.lam, "-", "input", f"lam/lam_c = {res.lam_ratio:.4g}"),
             ("bending capillary number Ca_B = eta U R0^2/kappa", res.ca_b, "-", "input", ""),
-            ("speed V/U", res.V_over_U, "-", method, pm("V_over_U")),
-            ("extra pressure drop dp+ R0/(eta U)", res.dp_plus_R0, "-", method, pm("dp_plus_R0")),
-            ("length L/R", res.ell, "-", method, ""),
-            ("smallest gap h/R", res.film_min, "-", method, ""),
-            ("largest tension gamma_max/(eta U)", res.tension_max, "-", method,
+            ("speed V", phys(res.V_over_U), "U", method, pm("V_over_U")),
+            ("extra pressure drop dp+", phys(res.dp_plus_R0), "eta U/R0", method,
+             pm("dp_plus_R0")),
+            ("length L", phys(res.ell), "R", method, ""),
+            ("smallest gap h", phys(res.film_min), "R", method, ""),
+            ("largest tension gamma_max", phys(res.tension_max), "eta U", method,
              pm("tension_max")),
-            ("largest wall shear stress tau_w R/(eta U) = shear rate R/U", res.wall_shear_max,
-             "-", method, "Poiseuille: 4"),
-            ("rear / front curvature (neg. convex)",
-             f"{res.curvature_rear:.4g} / {res.curvature_front:.4g}", "1/R", method, ""),
-            ("shape class", res.shape_class, "", method, ""),
+            ("largest wall shear stress tau_w (= shear rate x eta)", phys(res.wall_shear_max),
+             "eta U/R", method, "Poiseuille: 4"),
+            ("rear / front curvature (neg. convex)", curv, "1/R", method, ""),
+            ("shape class", phys(res.shape_class) or None, "", method, ""),
             ("steady residual max|u - V e_x|", res.residual, "U", method, ""),
-            ("volume / area error", f"{res.volume_error:.1e} / {res.area_error:.1e}", "-",
-             "panel quadrature", ""),
+            ("volume / area error", f"{res.volume_error:.1e} / {res.area_error:.1e}"
+             if math.isfinite(res.volume_error) else None, "-", "panel quadrature", ""),
             ("time", res.timings.get("total_s"), "s", "", ""),
-            ("converged", res.success, "", "", "" if res.success else res.message)]
+            ("converged", ok, "", "", "" if ok else res.message)]
     _plot_shape(res, args)
     return out, format_rows(rows, f"Vesicle, viscosity ratio 1, on the axis of Poiseuille flow "
                                   f"(BEM): nu = {res.nu:g}, lam = {res.lam:g}, "
@@ -144,22 +216,61 @@ def _sweep_values(args):
     import numpy as np
 
     from lubrication.cli_contract import UsageError
+
+    from .sweep import MAX_POINTS
     option, (a, b, n) = (("--lam", args.lam) if args.lam is not None
                          else ("--lam-ratio", args.lam_ratio))
     if not (math.isfinite(n) and n.is_integer() and n >= 2):
         raise UsageError(f"{option} {a:g} {b:g} {n:g}: N, the number of points, must be an "
                          "integer >= 2")
+    if n > MAX_POINTS:
+        raise UsageError(f"{option} {a:g} {b:g} {n:g}: at most N = {MAX_POINTS} points (each "
+                         "point is a full vesicle solve, seconds to minutes)")
     return {"lams" if option == "--lam" else "lam_ratios": np.linspace(a, b, int(n))}
+
+
+#: columns of the sweep table: (key, header, format)
+_SWEEP_TABLE = (("lam", "lam=R0/R", ".5g"), ("lam_ratio", "lam/lam_c", ".4f"),
+                ("V_over_U", "V/U", ".5g"), ("dp_plus_R0", "dp+ R0/(eta U)", ".4g"),
+                ("film_min", "h/R", ".3g"), ("ell", "L/R", ".4g"),
+                ("shape_class", "shape", ""), ("runtime", "time [s]", ".0f"),
+                ("converged", "converged", ""))
+
+
+def _sweep_text(table, title: str) -> str:
+    """One row per point, labelled columns; "—" for missing values."""
+    from lubrication.cli_contract import format_value
+    cells = [[h for _, h, _ in _SWEEP_TABLE]]
+    for t in table:
+        row = []
+        for key, _, fmt in _SWEEP_TABLE:
+            v = t.get(key)
+            row.append(format(v, fmt) if fmt and isinstance(v, float) and math.isfinite(v)
+                       else format_value(v))
+        cells.append(row)
+    widths = [max(len(r[i]) for r in cells) for i in range(len(_SWEEP_TABLE))]
+    lines = [title]
+    for k, r in enumerate(cells):
+        lines.append("  ".join(c.rjust(w) for c, w in zip(r, widths)))
+        if k == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    failed = [t for t in table if not t["converged"]]
+    lines += [f"lam = {t['lam']:.5g}: NOT CONVERGED: {t['message']}" for t in failed]
+    return "\n".join(lines)
 
 
 def cmd_bem_vesicle_sweep(args):
     """Steady vesicles over a range of confinements at fixed nu (continuation in lam)."""
-    from lubrication.cli_contract import format_rows
-
-    from .sweep import save_sweep, sweep_table, sweep_vesicle
+    from .sweep import _confinements
+    from .vesicle import check_vesicle_inputs
     points = _sweep_values(args)
-    solver = {"n_modes": args.modes, "tol": args.tol, "residual_tol": args.residual_tol,
-              "max_modes": args.max_modes}
+    solver = _vesicle_solver_options(args)
+    with _options_named():
+        _, lams, _, _ = _confinements(args.nu, points.get("lams"), points.get("lam_ratios"),
+                                      args.ca_b)
+        check_vesicle_inputs(args.nu, float(lams[0]), ca_b=args.ca_b, max_time=args.max_time,
+                             **solver)
+    from .sweep import save_sweep, sweep_table, sweep_vesicle
     done = []
 
     def report(i, n, res, seconds):
@@ -173,13 +284,17 @@ def cmd_bem_vesicle_sweep(args):
             save_sweep(args.out, sorted(done, key=lambda r: r.lam), solver, profiles=False,
                        complete=False)
 
-    results = sweep_vesicle(args.nu, **points, ca_b=args.ca_b, progress=report, **solver)
+    results = sweep_vesicle(args.nu, **points, ca_b=args.ca_b, progress=report,
+                            max_time=args.max_time, **solver)
     table = sweep_table(results)
     r0 = results[0]
     out = {"command": "bem", "subcommand": "vesicle-sweep", "nu": r0.nu, "lam_c": r0.lam_c,
            "ca_b": r0.ca_b, "parameters": solver, "converged": all(r.success for r in results),
            "n_points": len(results), "n_converged": sum(bool(r.success) for r in results),
            "points": table}
+    if not out["converged"]:
+        out["message"] = f"{len(results) - out['n_converged']} of {len(results)} points did " \
+                         "not converge"
     if args.out:
         out["files"] = [str(p) for p in save_sweep(args.out, results, solver)]
     if args.plot:
@@ -187,69 +302,80 @@ def cmd_bem_vesicle_sweep(args):
 
         from .plotting import plot_vesicle_sweep
         save_plot(plot_vesicle_sweep(results), args.plot)
-    rows = [(f"lam = {t['lam']:.5g} (lam/lam_c = {t['lam_ratio']:.4f})", t["V_over_U"], "V/U",
-             f"dp+R0/(eta U) = {t['dp_plus_R0']:.4g}, h/R = {t['film_min']:.3g}, "
-             f"L/R = {t['ell']:.3g}, {t['shape_class']}, {t['runtime']:.0f} s"
-             if t["converged"] else f"{t['runtime']:.0f} s",
-             "" if t["converged"] else "NOT CONVERGED") for t in table]
-    title = (f"Vesicle sweep (BEM), nu = {r0.nu:g}, Ca_B = {r0.ca_b:g}: "
-             f"{out['n_converged']}/{len(results)} points converged")
-    return out, format_rows(rows, title)
+    title = (f"Vesicle sweep (BEM), nu = {r0.nu:g}, lam_c = {r0.lam_c:.4g}, Ca_B = "
+             f"{r0.ca_b:g}: {out['n_converged']}/{len(results)} points converged; "
+             "V/U speed over the mean velocity, dp+ extra pressure drop, h/R smallest gap, "
+             "L/R length")
+    return out, _sweep_text(table, title)
 
 
 def _vesicle_options(p, sweep: bool) -> None:
     """Inputs and refinement options of ``bem vesicle`` (one lam) and ``vesicle-sweep``
     (``--lam A B N``)."""
-    p.add_argument("--nu", type=float, required=True, help="reduced volume, 0 < nu < 1 [-]")
+    from lubrication.cli_contract import add_max_time_option, finite_float, positive_int
+    p.add_argument("--nu", type=finite_float, required=True, help="reduced volume, 0 < nu < 1 [-]")
     g = p.add_mutually_exclusive_group(required=True)
     many = {"nargs": 3, "metavar": ("A", "B", "N")} if sweep else {}
-    points = "N values from A to B of the " if sweep else ""
-    g.add_argument("--lam", type=float, **many,
+    points = "N values (at most 100) from A to B of the " if sweep else ""
+    g.add_argument("--lam", type=finite_float, **many,
                    help=points + "confinement R0/R, 0 < lam < lam_c(nu) [-]")
-    g.add_argument("--lam-ratio", type=float, dest="lam_ratio", **many,
+    g.add_argument("--lam-ratio", type=finite_float, dest="lam_ratio", **many,
                    help=points + "confinement over critical lam/lam_c, 0 < ratio < 1 [-]")
-    p.add_argument("--ca-b", type=float, default=50.0, dest="ca_b",
-                   help="bending capillary number eta U R0^2/kappa (default 50) [-]")
-    p.add_argument("--n-modes", "--modes", type=int, dest="modes",
-                   help="shape modes of the fine mesh (default: automatic refinement)")
-    p.add_argument("--tol", type=float, default=1e-4,
+    p.add_argument("--ca-b", type=finite_float, default=50.0, dest="ca_b",
+                   help="bending capillary number eta U R0^2/kappa, 0.01 to 1e5 (default 50) [-]")
+    p.add_argument("--n-modes", "--modes", type=positive_int, dest="modes",
+                   help="shape modes of the fine mesh, 8 to 96 (default: automatic refinement)")
+    p.add_argument("--tol", type=finite_float, default=1e-4,
                    help="relative tolerance of the refinement pair in V/U, dp+ and "
-                        "gamma_max (default 1e-4) [-]")
-    p.add_argument("--residual-tol", type=float, default=1e-4, dest="residual_tol",
-                   help="tolerance of the steady residual max|u - V e_x| (default 1e-4) [U]")
-    p.add_argument("--max-modes", type=int, default=None, dest="max_modes",
-                   help="largest number of shape modes of the automatic refinement (default "
-                        "40, or ~6 per tube radius of length for long vesicles, 64 at "
+                        "gamma_max, 1e-12 to 0.5 (default 1e-4) [-]")
+    p.add_argument("--residual-tol", type=finite_float, default=1e-4, dest="residual_tol",
+                   help="tolerance of the steady residual max|u - V e_x|, 1e-14 to 10 "
+                        "(default 1e-4) [U]")
+    p.add_argument("--max-modes", type=positive_int, default=None, dest="max_modes",
+                   help="largest number of shape modes of the automatic refinement, 8 to 96 "
+                        "(default 40, or ~6 per tube radius of length for long vesicles, 64 at "
                         "nu = 0.6 near lam_c; near lam_c use --tol 1e-2 --residual-tol 5e-3)")
+    add_max_time_option(p)
 
 
 def add_bem_parser(subparsers) -> None:
     """Add ``bem sphere``, ``drop``, ``vesicle`` and ``vesicle-sweep`` to the subcommands."""
-    from lubrication.cli_contract import Parser
+    from lubrication.cli_contract import (
+        Parser,
+        add_max_time_option,
+        finite_float,
+        positive_int,
+    )
     logging.getLogger("bem").addHandler(logging.NullHandler())
     b = subparsers.add_parser("bem", help="boundary element solvers: rigid sphere, clean drop, vesicle")
     sub = b.add_subparsers(dest="bem_command", required=True, parser_class=Parser)
 
     s = sub.add_parser("sphere", help="free rigid sphere on the axis of Poiseuille flow")
-    s.add_argument("--lam", type=float, required=True, metavar="A_OVER_R",
-                   help="sphere radius over tube radius a/R, 0 < a/R < 1 [-]")
-    s.add_argument("--panels", type=int, help="sphere panels (default: automatic refinement)")
-    s.add_argument("--tol", type=float, default=1e-10,
-                   help="relative tolerance of the refinement pair (default 1e-10) [-]")
+    s.add_argument("--lam", type=finite_float, required=True, metavar="A_OVER_R",
+                   help="sphere radius over tube radius a/R, about 0.05 to 0.996 (smaller and "
+                        "nearer contact: refused with the closed-form limits) [-]")
+    s.add_argument("--panels", type=positive_int,
+                   help="sphere panels, >= 3, at most 4000 unknowns per mesh (default: "
+                        "automatic refinement)")
+    s.add_argument("--tol", type=finite_float, default=1e-8,
+                   help="relative tolerance of the refinement pair, 1e-14 to 0.1 "
+                        "(default 1e-8) [-]")
+    add_max_time_option(s)
     s.add_argument("--plot", metavar="FILE", help="write the geometry to FILE (PNG)")
     s.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     s.set_defaults(func=cmd_bem_sphere)
 
     d = sub.add_parser("drop", help="steady clean drop (viscosity ratio 1) in Poiseuille flow")
-    d.add_argument("--lam", type=float, required=True,
-                   help="drop volume radius over tube radius R0/R, 0 < lam < 1 [-]")
-    d.add_argument("--ca", type=float, required=True,
-                   help="capillary number eta U/gamma, U the mean velocity, > 0 [-]")
-    d.add_argument("--modes", type=int,
-                   help="shape modes of the fine mesh (default: automatic refinement)")
-    d.add_argument("--tol", type=float, default=1e-5,
-                   help="relative tolerance of the refinement pair in V/U and dp+ "
-                        "(default 1e-5) [-]")
+    d.add_argument("--lam", type=finite_float, required=True,
+                   help="drop volume radius over tube radius R0/R, about 0.01 to < 1 [-]")
+    d.add_argument("--ca", type=finite_float, required=True,
+                   help="capillary number eta U/gamma, U the mean velocity, 1e-8 to 100 [-]")
+    d.add_argument("--modes", type=positive_int,
+                   help="shape modes of the fine mesh, 6 to 64 (default: automatic refinement)")
+    d.add_argument("--tol", type=finite_float, default=1e-5,
+                   help="relative tolerance of the refinement pair in V/U and dp+, 1e-12 to "
+                        "0.1 (default 1e-5) [-]")
+    add_max_time_option(d)
     d.add_argument("--out", metavar="DIR", help="save the result as JSON + CSV shape in DIR")
     d.add_argument("--plot", metavar="FILE", help="write the drop shape to FILE (PNG)")
     d.add_argument("--json", action="store_true", help="print one JSON object on stdout")

@@ -43,6 +43,30 @@ Time integration (:func:`relax_drop`) moves the interface with the normal veloci
 :math:`u\cdot n - V n_x` projected on the shape modes in least squares, i.e. with the tangential
 motion that keeps the nodes at fixed values of the curve parameter (tangential redistribution);
 it provides initial guesses and shows that a steady state stays put.
+
+Resource envelope (checked before any BEM work by :func:`check_drop_inputs`; measured on 2
+shared cores):
+
+* 8 <= modes <= 64 (``n_modes`` or ``max_modes``): panels max(8, ceil(N/3)), so a level has at
+  most 22 drop panels and its dense operators stay ~0.2 GB (peak RSS 0.17 GB at 32 modes);
+  one BEM evaluation takes ~0.05–0.3 s, a difference Jacobian one evaluation per mode.
+* Ca: :data:`CA_MIN` = 1e-8 <= Ca <= :data:`CA_MAX` = 100. The interface load is
+  κ/Ca, so the round-off of the curvature is amplified by 1/Ca: the steady residual is
+  ~1e-17/Ca (8.7e-15 at Ca = 1e-3, 1.4e-12 at 1e-5, 9.5e-10 at 1e-8, λ = 0.5, 7–10 s each),
+  and it overflows to NaN near Ca = 1e-300, where the seed search then relaxed the shape in
+  time with a step ∝ Ca (5000 steps of two BEM solves: hours). Below Ca = 1e-8 the drop is a
+  sphere to O(Ca) (V/U at λ = 0.5 changes by 4e-8 from Ca = 1e-3 to 1e-8); small drops then
+  follow the clean-drop limit V/U = 2 − 0.8λ², Δp⁺R0/(ηU) = 4.8λ⁶ (Hetsroni & Haber 1970;
+  notes of this package). Above Ca ~ 1 a drop of λ = 0.8 has no steady shape (it keeps
+  elongating; reported after a relaxation of 6 R/U); Ca > 100 is refused.
+* λ: Δp⁺R/(ηU) ≈ 4.8λ⁵ meets the BEM's round-off (pair differences 2e-16–5e-16) for small
+  drops, as for the rigid sphere (:mod:`bem.solve`): λ >= max(0.01, (4e-16/(4.8 tol))^(1/5))
+  (0.0095 at tol = 1e-5; λ = 0.02 and 0.05 at Ca = 0.1 converge in 9 s), below that the
+  small clean-drop limit is quoted in the refusal. Near λ = 1 the drop touches the wall
+  (reported, ``success`` False).
+* ``max_time`` (wall time, :class:`lubrication.checks.Deadline`) is tested between BEM
+  evaluations (Levenberg–Marquardt, relaxation steps) and levels; the time relaxation stops
+  after ``max_steps`` = 5000 steps in any case.
 """
 
 from __future__ import annotations
@@ -55,7 +79,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from lubrication.checks import InvalidParameterError, check_positive, check_range
+from lubrication.checks import Deadline, InvalidParameterError, check_positive, check_range
 
 from .assembly import poiseuille
 from .geometry import graded_breaks, wall_half_length
@@ -70,8 +94,18 @@ from .quadrature import (
 )
 from .shape import SpectralCurve, equidistributing_density, fit_curve
 
-__all__ = ["DropDiscretisation", "DropOperator", "DropState", "NewtonReport", "find_seed",
-           "newton_drop", "relax_drop", "solve_drop"]
+__all__ = ["CA_MAX", "CA_MIN", "LAM_MIN", "MAX_MODES", "DropDiscretisation", "DropOperator",
+           "DropState", "NewtonReport", "check_drop_inputs", "find_seed", "newton_drop",
+           "relax_drop", "solve_drop"]
+
+#: capillary numbers accepted by :func:`solve_drop` (see the module docstring)
+CA_MIN, CA_MAX = 1e-8, 100.0
+#: smallest confinement accepted by :func:`solve_drop` (at any tol; module docstring)
+LAM_MIN = 0.01
+#: absolute round-off of dp+ R/(eta U) between two levels (measured 2e-16 to 5e-16)
+_DP_ROUNDOFF = 4e-16
+#: most shape modes of one level (resource envelope)
+MAX_MODES = 64
 
 log = logging.getLogger(__name__)
 
@@ -283,13 +317,14 @@ class NewtonReport:
 
 def newton_drop(op: DropOperator, modes0, V0: float | None = None, *, tol: float = 1e-9,
                 max_iter: int = 40, fd_step: float = 1e-7,
-                max_jacobians: int = 8) -> NewtonReport:
+                max_jacobians: int = 8, deadline=None) -> NewtonReport:
     r"""Steady drop shape by Levenberg–Marquardt on the weighted residual.
 
     Unknowns: modes c_2..c_N (c_1 closes the curve) and V. Residual
     :math:`F_i = \sqrt{w_i}\,(u\cdot n - V n_x)_i` at the drop nodes, minimised by
     :func:`bem.newton.levenberg_marquardt` (difference Jacobian, one BEM evaluation per mode,
-    then Broyden updates; the V column is exact).
+    then Broyden updates; the V column is exact). ``deadline``: wall-time budget
+    (:class:`lubrication.checks.Deadline`), an unsuccessful report when spent.
     """
     modes = np.array(modes0, dtype=float)
     ev0 = op.evaluations
@@ -310,7 +345,7 @@ def newton_drop(op: DropOperator, modes0, V0: float | None = None, *, tol: float
 
     rep = levenberg_marquardt(fun, np.concatenate([op.free(modes), [V0]]), tol=tol,
                               max_iter=max_iter, fd_step=fd_step, max_jacobians=max_jacobians,
-                              exact_columns=v_column,
+                              exact_columns=v_column, deadline=deadline,
                               start=(np.sqrt(state.weights) * state.residual(V0), state))
     st = rep.payload
     return NewtonReport(rep.success, rep.message, st, float(rep.z[-1]),
@@ -337,7 +372,7 @@ def _shape_velocity_matrix(op: DropOperator, modes: np.ndarray, h: float = 1e-7)
 
 
 def relax_drop(op: DropOperator, modes0, t_end: float, *, dt: float | None = None,
-               max_steps: int = 5000, tol: float = 0.0):
+               max_steps: int = 5000, tol: float = 0.0, deadline=None):
     r"""Integrate the interface in time with the normal velocity :math:`u\cdot n - V n_x`.
 
     The normal velocity at the nodes is projected on the shape modes in least squares
@@ -349,7 +384,7 @@ def relax_drop(op: DropOperator, modes0, t_end: float, *, dt: float | None = Non
     region and resolves the advection by the flow; the step is halved whenever the largest normal velocity grows by more than 50 %.
     V is the centroid velocity :math:`\Omega^{-1}\int x\,u\cdot n\,dS` (Chen et al. 2020 eq.
     Vel). Stops at ``t_end``, after ``max_steps``, or when the largest normal velocity in the
-    drop frame falls below ``tol``.
+    drop frame falls below ``tol``, or (a failure) when ``deadline`` is spent.
 
     Returns (modes, state, info) with info = {t, steps, max_un, history, length, failure};
     history holds (t, max|u.n - V n_x|, V) per step, length the drop length x_front - x_rear,
@@ -379,6 +414,9 @@ def relax_drop(op: DropOperator, modes0, t_end: float, *, dt: float | None = Non
     failure = ""
     state = None
     while t < t_end - 1e-14 and steps < max_steps:
+        if deadline is not None and deadline.expired():
+            failure = deadline.message()
+            break
         h = min(dt, t_end - t)
         try:
             k1, state, V, un = rate(modes)
@@ -427,17 +465,63 @@ def _check_inputs(lam, ca):
     lam = float(check_range("lam", lam, 0.0, 1.0, lo_open=True, hi_open=True,
                             reason="the undeformed drop must fit inside the tube (R0 < R)"))
     ca = float(check_positive("ca", ca))
+    if ca < CA_MIN:
+        raise InvalidParameterError(
+            "ca", ca, f"{CA_MIN:g} <= ca <= {CA_MAX:g}",
+            f"below it the drop is a sphere to O(Ca) and the round-off of the interface load "
+            f"(~1e-17/Ca) dominates; solve at Ca = {CA_MIN:g} instead (small drops: V/U = "
+            f"2 - 0.8 lam^2 = {2 - 0.8 * lam**2:.6g})")
+    if ca > CA_MAX:
+        raise InvalidParameterError(
+            "ca", ca, f"{CA_MIN:g} <= ca <= {CA_MAX:g}",
+            "a clean drop of viscosity ratio 1 has no steady shape at such capillary numbers "
+            "(it keeps elongating: no steady shape is found already near Ca = 1 at lam = 0.8)")
     return lam, ca
 
 
-def _solve_stage(lam, ca, disc, seed: SpectralCurve, V0, density=None):
+def check_drop_inputs(lam, ca, *, n_modes=None, tol=1e-5, residual_tol=1e-4, max_modes=64,
+                      max_time=None):
+    """Check the inputs of :func:`solve_drop` (ranges and the resource envelope of the module
+    docstring) without any BEM work; returns them as Python numbers (lam, ca, n_modes, tol,
+    residual_tol, max_modes). Raises :class:`InvalidParameterError` naming the input."""
+    lam, ca = _check_inputs(lam, ca)
+    tol = float(check_range("tol", tol, 1e-12, 0.1))
+    smallest = max(LAM_MIN, (_DP_ROUNDOFF / (4.8 * tol)) ** 0.2)
+    if lam < smallest:
+        raise InvalidParameterError(
+            "lam", lam, f"{smallest:.3g} <= lam < 1 at tol={tol:g}",
+            f"below it dp+ R/(eta U) ~ 4.8 lam^5 = {4.8 * lam**5:.3g} is within the relative "
+            f"tol of the BEM's round-off (~4e-16); the small clean-drop limit applies there: "
+            f"V/U = 2 - 0.8 lam^2 = {2 - 0.8 * lam**2:.10g}, dp+ R0/(eta U) = 4.8 lam^6 = "
+            f"{4.8 * lam**6:.4g} (relative error O(lam^5))")
+    residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 1.0))
+    max_modes = _mode_count("max_modes", max_modes, 8)
+    if n_modes is not None:
+        n_modes = _mode_count("n_modes", n_modes, 6)
+    if max_time is not None:
+        Deadline(max_time)                              # 0 < max_time < inf
+    return lam, ca, n_modes, tol, residual_tol, max_modes
+
+
+def _mode_count(name, value, lo) -> int:
+    """An integer number of shape modes within lo..MAX_MODES."""
+    value = check_range(name, value, lo, MAX_MODES,
+                        reason="more modes exceed the resource envelope of one level "
+                               "(memory, time per difference Jacobian)")
+    if float(value) != int(value):
+        raise InvalidParameterError(name, float(value), f"an integer, {lo} <= {name} <= "
+                                                        f"{MAX_MODES}")
+    return int(value)
+
+
+def _solve_stage(lam, ca, disc, seed: SpectralCurve, V0, density=None, deadline=None):
     """Refit ``seed`` to the discretisation (and density) and run Newton; returns (report, op)."""
     dens = seed.density if density is None else np.asarray(density, dtype=float)
     same = (seed.n_modes == disc.n_modes and seed.density.size == dens.size
             and np.array_equal(seed.density, dens))
     ref = seed if same else fit_curve(seed.sample, 0.0, 1.0, disc.n_modes, density=dens)
     op = DropOperator(lam, ca, disc, ref)
-    return newton_drop(op, ref.modes, V0), op
+    return newton_drop(op, ref.modes, V0, deadline=deadline), op
 
 
 def _elongation(info) -> float:
@@ -452,30 +536,34 @@ def _elongation(info) -> float:
 
 
 def find_seed(lam: float, ca: float, *, initial: SpectralCurve | None = None,
-              relax_time: float = 6.0, order: int = DEFAULT_ORDER):
+              relax_time: float = 6.0, order: int = DEFAULT_ORDER, deadline=None):
     """Shape with ``SEED_MODES`` uniform-density modes close to the steady drop.
 
     Newton from ``initial`` (default: the sphere); if it fails, the interface is relaxed in
     time for up to ``relax_time`` (R/U) and Newton restarted. Returns (curve, V, info); curve
     is None when no steady shape was found, with info["message"] saying why (a drop that keeps
-    elongating is reported as such).
+    elongating is reported as such). ``deadline``: wall-time budget, tested between BEM
+    evaluations.
     """
     disc = DropDiscretisation(n_modes=SEED_MODES, n_panels=_panels_for(SEED_MODES), order=order)
     start = SpectralCurve.sphere(lam, SEED_MODES) if initial is None else initial
     if start.density.size:                                   # the seed stage is uniform
         start = fit_curve(start.sample, 0.0, 1.0, SEED_MODES)
     info = {"relaxed": False}
-    rep, op = _solve_stage(lam, ca, disc, start, None)
+    rep, op = _solve_stage(lam, ca, disc, start, None, deadline=deadline)
     info.update(iterations=rep.iterations, evaluations=rep.evaluations, jacobians=rep.jacobians)
     # a seed only has to be close: accept the floor of 16 modes (sharp rims) if LM stalled
     if rep.state is not None and (rep.success or rep.state.max_residual(rep.V) < 0.02):
         info["message"] = rep.message
         info["residual"] = rep.state.max_residual(rep.V)
         return rep.state.curve, rep.V, info
+    if deadline is not None and deadline.expired():
+        info["message"] = f"no steady shape found: {deadline.message()}"
+        return None, math.nan, info
     log.info("seed Newton failed at lam=%g ca=%g (%s); relaxing in time", lam, ca, rep.message)
     info["relaxed"] = True
     op = DropOperator(lam, ca, disc, start)
-    _, state, rinfo = relax_drop(op, start.modes, relax_time, tol=0.01)
+    _, state, rinfo = relax_drop(op, start.modes, relax_time, tol=0.01, deadline=deadline)
     info["relax_time"] = rinfo["t"]
     relax_evaluations = op.evaluations
     rate = _elongation(rinfo)
@@ -488,7 +576,7 @@ def find_seed(lam: float, ca: float, *, initial: SpectralCurve | None = None,
         info["message"] = (f"no steady shape: Newton failed from the initial shape and in a time "
                            f"relaxation {what}{grow}; breakup or a non-steady drop")
         return None, math.nan, info
-    rep, op = _solve_stage(lam, ca, disc, state.curve, None)
+    rep, op = _solve_stage(lam, ca, disc, state.curve, None, deadline=deadline)
     info.update(iterations=info["iterations"] + rep.iterations,
                 evaluations=info["evaluations"] + rep.evaluations + relax_evaluations,
                 jacobians=info["jacobians"] + rep.jacobians)
@@ -534,15 +622,17 @@ def _profile(curve: SpectralCurve, n: int = 201) -> dict:
 
 def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float = 1e-5,
                residual_tol: float = 1e-4, max_modes: int = 64, order: int = DEFAULT_ORDER,
-               initial=None, density_terms: int = 16):
+               initial=None, density_terms: int = 16, max_time: float | None = None):
     r"""Steady clean drop (viscosity ratio 1, constant tension) on the axis of a tube.
 
     Parameters
     ----------
     lam : float
-        Confinement R0/R, 0 < lam < 1, R0 the radius of the sphere of the drop's volume [-].
+        Confinement R0/R, max(0.01, (4e-16/(4.8 tol))^(1/5)) <= lam < 1, R0 the radius of the sphere of the
+        drop's volume [-].
     ca : float
-        Capillary number ηU/γ, U the mean velocity, γ the tension [-].
+        Capillary number ηU/γ, U the mean velocity, γ the tension, CA_MIN = 1e-8 <= ca <=
+        CA_MAX = 100 [-] (module docstring).
     n_modes : int, optional
         Shape modes of the fine mesh (panels follow: max(8, ceil(n/3))); the coarse mesh of
         the refinement pair has round(2n/3). Default: automatic, n = 24, 32, 40, ... until the
@@ -556,12 +646,21 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
     density_terms : int
         Cosine terms of the arc-length density built from the seed's curvature
         (:func:`bem.shape.equidistributing_density`); 0 keeps the arc length uniform.
+    max_time : float, optional
+        Wall-time budget [s] (:class:`lubrication.checks.Deadline`), tested between BEM
+        evaluations; when spent the result is returned with ``success`` False. Default: no
+        limit.
 
     Returns
     -------
     DropResult
         ``success`` False, with the reason in ``message``, when no steady shape was found, the
-        drop touched the wall, or the accuracy targets were not met.
+        drop touched the wall, the accuracy targets were not met or ``max_time`` was spent.
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad input or a request outside the resource envelope, before any BEM work.
 
     Examples
     --------
@@ -576,12 +675,11 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
     from .results import DropResult
 
     t_start = time.perf_counter()
-    lam, ca = _check_inputs(lam, ca)
-    tol = float(check_range("tol", tol, 1e-12, 0.1))
-    residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 1.0))
-    max_modes = int(check_range("max_modes", max_modes, 8, 512))
+    lam, ca, n_modes, tol, residual_tol, max_modes = check_drop_inputs(
+        lam, ca, n_modes=n_modes, tol=tol, residual_tol=residual_tol, max_modes=max_modes,
+        max_time=max_time)
+    deadline = Deadline(max_time)
     if n_modes is not None:
-        n_modes = int(check_range("n_modes", n_modes, 6, 512))
         sequence = [max(4, round(2 * n_modes / 3)), n_modes]
     else:
         sequence = list(range(24, max(max_modes, 32) + 1, 8))
@@ -592,7 +690,7 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
     if initial is not None and not isinstance(initial, SpectralCurve):
         initial = initial.curve()
     t0 = time.perf_counter()
-    seed, seed_V, info = find_seed(lam, ca, initial=initial, order=order)
+    seed, seed_V, info = find_seed(lam, ca, initial=initial, order=order, deadline=deadline)
     iterations["seed"] = {k: v for k, v in info.items() if k != "message"}
     if seed is None:
         timings["seed_s"] = timings["total_s"] = time.perf_counter() - t_start
@@ -604,7 +702,7 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
         # a solution that uses it, which does
         disc = DropDiscretisation(n_modes=sequence[0], n_panels=_panels_for(sequence[0]),
                                   order=order)
-        rep, _ = _solve_stage(lam, ca, disc, seed, seed_V, density)
+        rep, _ = _solve_stage(lam, ca, disc, seed, seed_V, density, deadline=deadline)
         iterations["density"] = {"iterations": rep.iterations, "evaluations": rep.evaluations,
                                  "jacobians": rep.jacobians}
         if rep.state is not None:
@@ -617,10 +715,13 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
     prev, V_prev = seed, seed_V
     message = ""
     for k, n in enumerate(sequence):
+        if deadline.expired():
+            message = deadline.message()
+            break
         disc = DropDiscretisation(n_modes=n, n_panels=_panels_for(n), order=order)
         t0 = time.perf_counter()
         try:
-            rep, op = _solve_stage(lam, ca, disc, prev, V_prev, density)
+            rep, op = _solve_stage(lam, ca, disc, prev, V_prev, density, deadline=deadline)
         except InvalidParameterError as exc:
             message = f"stage with {n} modes: {exc}"
             break

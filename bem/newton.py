@@ -20,6 +20,12 @@ judges the outputs.
 vesicle near lam_c, see its docstring): the same damped steps, but the Jacobian is kept
 up to date by differences along a few directions per step instead of all of them, and every
 second step is extrapolated along the valley (parallel tangents).
+
+Wall-time budget: both take an optional ``deadline`` (:class:`lubrication.checks.Deadline`),
+tested before every evaluation of F after the first; once it is spent they return an
+unsuccessful report whose message is the deadline's, carrying the evaluated point of smallest
+|F| (never an exception). One evaluation is one BEM solve (well under a second at the
+resolutions the solvers allow), so the budget is kept to within about one evaluation.
 """
 
 from __future__ import annotations
@@ -34,6 +40,41 @@ from lubrication.checks import InvalidParameterError
 
 __all__ = ["LMReport", "difference_jacobian", "levenberg_marquardt",
            "valley_levenberg_marquardt"]
+
+
+class _Expired(Exception):
+    """The wall-time budget of a solve was spent (internal; turned into an LMReport)."""
+
+
+def _budgeted(fun, deadline, best: list):
+    """``fun`` that raises :class:`_Expired` once ``deadline`` is spent (never on the first
+    call) and records in ``best`` = [norm, z, F, payload] the evaluated point of smallest |F|."""
+    if deadline is None:
+        return fun
+
+    def wrapped(z):
+        if best and deadline.expired():
+            raise _Expired
+        F, payload = fun(z)
+        norm = float(np.linalg.norm(F))
+        if not best or norm < best[0]:
+            best[:] = [norm, np.array(z, dtype=float), F, payload]
+        return F, payload
+    return wrapped
+
+
+def _within_budget(solver, fun, z0, deadline, start, **kwargs) -> "LMReport":
+    """Run ``solver(fun, z0, start=start, **kwargs)`` under ``deadline``."""
+    best: list = []
+    if deadline is not None and start is not None:
+        F0, pl0 = start
+        best[:] = [float(np.linalg.norm(F0)), np.array(z0, dtype=float), F0, pl0]
+    try:
+        return solver(_budgeted(fun, deadline, best), z0, start=start, **kwargs)
+    except _Expired:
+        log.info("Levenberg–Marquardt: %s", deadline.message())
+        _, z, F, payload = best
+        return LMReport(False, deadline.message(), z, F, payload, 0, 0, 0, [best[0]])
 
 log = logging.getLogger(__name__)
 
@@ -91,7 +132,8 @@ def _initial_state(fun, z, start):
 def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
                         fd_step: float = 1e-7, max_jacobians: int = 8,
                         exact_columns=None, stall: float | None = None,
-                        floor_ratio: float | None = None, start=None) -> LMReport:
+                        floor_ratio: float | None = None, start=None,
+                        deadline=None) -> LMReport:
     """Minimise |F(z)| (see the module docstring).
 
     ``fun(z)`` returns (F, payload) and raises InvalidParameterError for an invalid shape;
@@ -104,8 +146,17 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
     spent Jacobian budget after |F| fell less than 10 % over three steps (ill-conditioned
     problems with flat directions: the vesicle near lam_c). Without it a stall is a failure
     (the drop: a stall there means no steady shape). ``start``: (F, payload) at ``z0`` if the
-    caller has already evaluated it (saves one evaluation).
+    caller has already evaluated it (saves one evaluation). ``deadline``: wall-time budget
+    (module docstring).
     """
+    return _within_budget(_levenberg_marquardt, fun, z0, deadline, start, tol=tol,
+                          max_iter=max_iter, fd_step=fd_step, max_jacobians=max_jacobians,
+                          exact_columns=exact_columns, stall=stall, floor_ratio=floor_ratio)
+
+
+def _levenberg_marquardt(fun, z0, *, tol, max_iter, fd_step, max_jacobians, exact_columns,
+                         stall, floor_ratio, start) -> LMReport:
+    """The iteration of :func:`levenberg_marquardt`."""
     z = np.array(z0, dtype=float)
     first = _initial_state(fun, z, start)
     if isinstance(first, LMReport):
@@ -236,7 +287,7 @@ def _promised(J, F, norm):
 def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 300,
                                fd_step: float = 1e-7, max_jacobians: int = 4,
                                directions: int = 3, promise: float = 1e-2,
-                               start=None) -> LMReport:
+                               start=None, deadline=None) -> LMReport:
     r"""Minimise |F(z)| along a long, curved valley (interface as :func:`levenberg_marquardt`).
 
     Why: near lam_c a long vesicle has one slow shape mode (volume moved between the rear and
@@ -258,8 +309,16 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
     less than a ``promise`` relative decrease of |F|^2 (the residual floor of the
     overdetermined equations), or its step is below ``tol`` (a small step of an updated
     Jacobian, with large damping, proves nothing). At most ``max_jacobians`` difference
-    Jacobians.
+    Jacobians. ``deadline``: wall-time budget (module docstring).
     """
+    return _within_budget(_valley_levenberg_marquardt, fun, z0, deadline, start, tol=tol,
+                          max_iter=max_iter, fd_step=fd_step, max_jacobians=max_jacobians,
+                          directions=directions, promise=promise)
+
+
+def _valley_levenberg_marquardt(fun, z0, *, tol, max_iter, fd_step, max_jacobians,
+                                directions, promise, start) -> LMReport:
+    """The iteration of :func:`valley_levenberg_marquardt`."""
     z = np.array(z0, dtype=float)
     first = _initial_state(fun, z, start)
     if isinstance(first, LMReport):

@@ -31,8 +31,10 @@ def plot_shape(result, ax=None):
 
     Parameters
     ----------
-    result : DropResult or SphereResult
-        A drop draws its computed shape (``x``, ``r``), a sphere the circle of radius lam.
+    result : DropResult, VesicleResult or SphereResult
+        A drop or vesicle draws its computed shape (``x``, ``r``), a sphere the circle of
+        radius lam. The title gives V/U and Δp⁺ in the scaling of the CLI table (R0 for a
+        vesicle, R otherwise), and no numbers for a result that did not converge.
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; a new headless figure (``matplotlib.figure.Figure``, no pyplot) is
         made if None.
@@ -56,12 +58,20 @@ def plot_shape(result, ax=None):
     ax.plot(x, -r, "-", color="tab:blue", lw=1.5)
     _draw_tube(ax, half)
     title = f"λ = {result.lam:.4g}"
+    if hasattr(result, "nu"):
+        title = f"ν = {result.nu:.4g}, " + title
     if hasattr(result, "ca"):
         title += f", Ca = {result.ca:.4g}"
-    if math.isfinite(getattr(result, "V_over_U", math.nan)):
-        title += f": V/U = {result.V_over_U:.5g}, Δp⁺R/(ηU) = {result.dp_plus_R:.5g}"
+    if hasattr(result, "ca_b"):
+        title += f", Ca_B = {result.ca_b:.4g}"
+    # the pressure drop in the scaling of the CLI table: R0 (volume radius) for a vesicle
+    # (Chen et al. 2020), R for a drop or a rigid sphere
+    dp, scale = ((result.dp_plus_R0, "Δp⁺R0/(ηU)") if hasattr(result, "nu")
+                 else (result.dp_plus_R, "Δp⁺R/(ηU)"))
+    if result.converged and math.isfinite(result.V_over_U) and math.isfinite(dp):
+        title += f": V/U = {result.V_over_U:.5g}, {scale} = {dp:.5g}"
     if not result.converged:
-        title += " (NOT CONVERGED)"
+        title += " (NOT CONVERGED: no values)"
     ax.set_title(title, fontsize="small")
     return ax
 

@@ -23,7 +23,6 @@ import numpy as np
 
 from lubrication.checks import InvalidParameterError, check_positive, check_range
 
-from . import kernels
 
 __all__ = [
     "DEFAULT_ORDER",
@@ -191,6 +190,8 @@ def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NE
     as_tol = float(check_range("tol", tol, 1e-16, 1e-2))
     p = panels.order
     as_near = near_factor(p, as_tol) if near is None else float(check_positive("near", near))
+    from . import kernels      # lazy: input checks of the solvers run before numba loads
+
     t, _ = gauss_legendre(p)
     gx, gw = gauss_table()
     out = np.empty((2 * tx.size, 2 * panels.n_nodes))
@@ -206,6 +207,8 @@ def integrate_panel(x0: float, r0: float, panels: PanelSet, index: int, density,
     ``density`` is an array (p, 2) of node values of ``q`` on panel ``index``; returns the
     2-vector of the integral. Works for targets on, near or far from the panel.
     """
+    from . import kernels
+
     p = panels.order
     t, _ = gauss_legendre(p)
     gx, gw = gauss_table()

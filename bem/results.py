@@ -2,6 +2,12 @@
 
 Saved as JSON through a temporary file in the target directory and :func:`os.replace`, so an
 interrupted run never leaves a half-written file.
+
+Output hygiene: a result that did not converge keeps its best numbers as attributes (for
+diagnosis in Python), but every *output* of it -- :meth:`to_dict`, the JSON and CSV files of
+``save``, the CLI tables built from them -- reports its physical quantities as None (JSON
+null, CSV without profile rows) next to ``"converged": false`` and the message; only
+diagnostics (residuals, error estimates of the refinement pair, timings) are kept.
 """
 
 from __future__ import annotations
@@ -87,8 +93,12 @@ class SphereResult:
     provenance: dict = field(default_factory=provenance)
     message: str = ""
 
+    #: physical outputs, None in the output of an unconverged result
+    PHYSICAL = ("V_over_U", "dp_plus_R", "dp_plus_R0", "drag_K", "dp_translating_R")
+
     def to_dict(self) -> dict:
-        """Plain dict of JSON-compatible values (non-finite floats become None)."""
+        """Plain dict of JSON-compatible values (non-finite floats become None; the physical
+        outputs are None when the result did not converge)."""
         def clean(v):
             if isinstance(v, float) and not math.isfinite(v):
                 return None
@@ -97,7 +107,10 @@ class SphereResult:
             if hasattr(v, "item"):
                 return clean(v.item())
             return v
-        return {k: clean(v) for k, v in dataclasses.asdict(self).items()}
+        out = {k: clean(v) for k, v in dataclasses.asdict(self).items()}
+        if not self.converged:
+            out.update(dict.fromkeys(self.PHYSICAL))
+        return out
 
     def save(self, directory, name: str | None = None) -> Path:
         """Write ``<directory>/<name>.json`` atomically; returns the path."""
@@ -230,17 +243,24 @@ class DropResult:
                 "error_estimate", "length", "max_radius", "film", "curvature_front",
                 "curvature_rear", "volume_error", "residual", "tol", "residual_tol", "panels",
                 "panels_coarse", "half_length", "iterations", "timings", "provenance")
+    #: physical outputs, None in the output of an unconverged result
+    PHYSICAL = ("V_over_U", "dp_plus_R", "dp_plus_R0", "length", "max_radius", "film",
+                "curvature_front", "curvature_rear")
 
     def to_dict(self, shape: bool = True) -> dict:
-        """Scalars, diagnostics and provenance as a JSON-ready dict (non-finite -> None).
+        """Scalars, diagnostics and provenance as a JSON-ready dict (non-finite -> None; the
+        physical outputs and the shape are None when ``success`` is False).
 
         With ``shape`` the profile arrays x, r and the modes are included as lists.
         """
         out = {k: _clean(getattr(self, k)) for k in self._SCALARS}
         out["converged"] = bool(self.success)
+        if not self.success:
+            out.update(dict.fromkeys(self.PHYSICAL))
         if shape:
-            out["shape"] = {"x": _clean(self.x), "r": _clean(self.r),
-                            "modes": _clean(self.modes), "density": _clean(self.density)}
+            out["shape"] = ({"x": _clean(self.x), "r": _clean(self.r),
+                             "modes": _clean(self.modes), "density": _clean(self.density)}
+                            if self.success else None)
         return out
 
     def save(self, directory, stem: str | None = None) -> tuple[Path, Path]:
@@ -251,7 +271,12 @@ class DropResult:
         """
         stem = stem or f"bem_drop_lam{self.lam:.6g}_ca{self.ca:.6g}"
         return save_result(directory, stem, self.to_dict(), DROP_PROFILE_COLUMNS,
-                           lambda name: np.asarray(getattr(self, name)))
+                           lambda name: _profile_column(self, name))
+
+
+def _profile_column(result, name: str) -> np.ndarray:
+    """Profile column ``name`` for the CSV: empty (header only) for an unconverged result."""
+    return np.asarray(getattr(result, name)) if result.success else np.empty(0)
 
 
 # Columns of the CSV written by VesicleResult.save, with their units.
@@ -381,9 +406,15 @@ class VesicleResult:
                 "curvature_rear", "curvature_front", "shape_class", "error_estimate",
                 "volume_error", "area_error", "residual", "tol", "residual_tol", "panels",
                 "refinement", "seed", "iterations", "timings", "provenance")
+    #: physical outputs, None in the output of an unconverged result
+    PHYSICAL = ("V_over_U", "dp_plus_R0", "dp_plus_R", "ell", "film_min", "tension_max",
+                "wall_shear_max", "tension_rear", "tension_front", "curvature_rear",
+                "curvature_front", "shape_class")
 
     def to_dict(self, shape: bool = True) -> dict:
-        """Scalars, diagnostics and provenance as a JSON-ready dict (non-finite -> None).
+        """Scalars, diagnostics and provenance as a JSON-ready dict (non-finite -> None; the
+        physical outputs and the shape are None when ``success`` is False, and the
+        ``refinement`` history keeps only (modes, residual) per level).
 
         With ``shape`` the profiles x, r, tension and the spectral coefficients are included.
         """
@@ -391,10 +422,14 @@ class VesicleResult:
         out["converged"] = bool(self.success)
         out["lam_ratio"] = _clean(self.lam_ratio)
         out["bie_solves"] = self.bie_solves
+        if not self.success:
+            out.update(dict.fromkeys(self.PHYSICAL))
+            out["refinement"] = [[_clean(level[0]), _clean(level[1]), None, None, None]
+                                 for level in self.refinement]
         if shape:
-            out["shape"] = {k: _clean(getattr(self, k)) for k in
-                            ("x", "r", "tension", "modes", "density", "tension_modes",
-                             "wall_x", "wall_shear")}
+            out["shape"] = ({k: _clean(getattr(self, k)) for k in
+                             ("x", "r", "tension", "modes", "density", "tension_modes",
+                              "wall_x", "wall_shear")} if self.success else None)
         return out
 
     def save(self, directory, stem: str | None = None) -> tuple[Path, Path]:
@@ -402,4 +437,4 @@ class VesicleResult:
         Default stem ``bem_vesicle_nu<nu>_lam<lam>_cab<ca_b>``."""
         stem = stem or f"bem_vesicle_nu{self.nu:.6g}_lam{self.lam:.6g}_cab{self.ca_b:.6g}"
         return save_result(directory, stem, self.to_dict(), VESICLE_PROFILE_COLUMNS,
-                           lambda name: np.asarray(getattr(self, name)))
+                           lambda name: _profile_column(self, name))

@@ -19,6 +19,12 @@ nu = 0.98, Ca_B = 50, 16 modes: lam = 0.3 cold 15-27 s, lam = 0.4 continued from
 minutes, a sweep of ten points tens of minutes. Progress goes to the ``bem.sweep`` logger (INFO, one
 line per point) and to the optional ``progress`` callback.
 
+Resource envelope: at most :data:`MAX_POINTS` = 100 points (checked before any solve; at
+seconds to minutes per point that is already hours), each point bounded as in
+:mod:`bem.vesicle`; ``max_time`` bounds the whole sweep (tested between points and, through
+each point's remaining budget, inside them): the points not reached are returned unsolved
+(``success`` False, the deadline's message).
+
 Output: :func:`save_sweep` writes one CSV row per point (:data:`SWEEP_COLUMNS`) and a JSON with
 the parameters, atomically (:func:`lubrication.io.atomic_write`).
 """
@@ -36,12 +42,15 @@ from pathlib import Path
 
 import numpy as np
 
-from lubrication.checks import InvalidParameterError, as_finite
+from lubrication.checks import Deadline, InvalidParameterError, as_finite
 from lubrication.io import atomic_write
 
-__all__ = ["SWEEP_COLUMNS", "save_sweep", "sweep_table", "sweep_vesicle"]
+__all__ = ["MAX_POINTS", "SWEEP_COLUMNS", "save_sweep", "sweep_table", "sweep_vesicle"]
 
 log = logging.getLogger(__name__)
+
+#: most points of one sweep (each a full solve_vesicle, seconds to minutes)
+MAX_POINTS = 100
 
 #: Columns of the sweep CSV (one row per point), with their units.
 SWEEP_COLUMNS = (
@@ -84,6 +93,10 @@ def _confinements(nu, lams, lam_ratios, ca_b) -> tuple[float, np.ndarray, float,
     if values.ndim != 1 or values.size == 0:
         raise InvalidParameterError(name, np.array2string(values),
                                     "a non-empty 1-d sequence of finite numbers")
+    if values.size > MAX_POINTS:
+        raise InvalidParameterError(name, f"{values.size} points",
+                                    f"at most {MAX_POINTS} points",
+                                    "each point is a full vesicle solve (seconds to minutes)")
     by_ratio = lam_ratios is not None
     points = [_check_inputs(nu, None if by_ratio else v, v if by_ratio else None, ca_b)
               for v in map(float, values)]
@@ -99,7 +112,8 @@ def _with_runtime(res, seconds: float):
 
 def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
                   lam_ratios: Sequence[float] | None = None, ca_b: float = 50.0,
-                  progress: Progress | None = None, **solver_kwargs) -> list:
+                  progress: Progress | None = None, max_time: float | None = None,
+                  **solver_kwargs) -> list:
     r"""Steady vesicles at several confinements, solved by continuation in increasing lam.
 
     Parameters
@@ -118,6 +132,10 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
         Passed to every :func:`bem.vesicle.solve_vesicle` call (``n_modes``, ``tol``,
         ``residual_tol``, ``max_modes``, ``density_terms``, ...). ``initial`` seeds the first
         point only; later points start from the last converged result.
+    max_time : float, optional
+        Wall-time budget of the whole sweep [s] (:class:`lubrication.checks.Deadline`): each
+        point gets what is left; once spent, the remaining points are returned unsolved
+        (``success`` False with the deadline's message). Default: no limit.
 
     Returns
     -------
@@ -139,13 +157,20 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
     >>> [r.lam for r in out], [r.success for r in out], out[0].seed    # doctest: +SKIP
     ([0.4, 0.3], [True, True], 'initial')
     """
-    from . import vesicle  # lazy: numba loads only when a sweep runs
+    from . import vesicle  # numba loads only when the first point is solved
+    from .results import VesicleResult
 
     nu, lam, lam_c, ca_b = _confinements(nu, lams, lam_ratios, ca_b)
-    for key in ("lam", "lam_ratio"):
+    for key in ("lam", "lam_ratio", "max_time"):
         if key in solver_kwargs:
             raise InvalidParameterError(key, str(solver_kwargs[key]),
                                         "set by the sweep, not a solver option")
+    options = {k: v for k, v in solver_kwargs.items() if k in (
+        "n_modes", "tol", "residual_tol", "max_modes", "rung_modes", "density_terms",
+        "max_iter")}
+    vesicle.check_vesicle_inputs(nu, float(lam[0]), ca_b=ca_b, max_time=max_time, **options)
+    deadline = Deadline(max_time)
+    started = time.monotonic()
     start = solver_kwargs.pop("initial", None)
     order = np.argsort(lam, kind="stable")
     n = int(lam.size)
@@ -153,8 +178,14 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
     previous = start                                   # last converged result (or the seed)
     for i, k in enumerate(order, start=1):
         clock = time.perf_counter()
-        res = vesicle.solve_vesicle(nu, float(lam[k]), ca_b=ca_b, initial=previous,
-                                    **solver_kwargs)
+        if deadline.expired():
+            res = VesicleResult(nu=nu, lam=float(lam[k]), lam_c=lam_c, ca_b=ca_b,
+                                success=False, message=f"not solved: {deadline.message()}")
+        else:
+            left = None if max_time is None else max_time - (time.monotonic() - started)
+            res = vesicle.solve_vesicle(nu, float(lam[k]), ca_b=ca_b, initial=previous,
+                                        max_time=max(left, 1e-3) if left is not None
+                                        else None, **solver_kwargs)
         seconds = time.perf_counter() - clock
         res = results[k] = _with_runtime(res, seconds)
         if res.success:
@@ -168,9 +199,12 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
 
 
 def _cell(res, key: str):
-    """Value of column ``key`` for one result: JSON/CSV-ready (non-finite floats -> None)."""
+    """Value of column ``key`` for one result: JSON/CSV-ready (non-finite floats -> None; the
+    physical columns of a point that did not converge -> None)."""
     if key == "converged":
         return bool(res.success)
+    if not res.success and key in getattr(res, "PHYSICAL", ()):
+        return None
     if key == "runtime":
         value = res.timings.get("total_s")
     else:

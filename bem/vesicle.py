@@ -72,6 +72,22 @@ the solve, by :func:`bem.shape.fit_curve`; if it fails (or the fit closes the fi
 spheroid of the right ν, or where that does not fit in the tube a capsule of radius λ/λc
 (:func:`capsule_seed`; for a long parachute the fore-aft symmetric capsule can end in a spurious
 steady-looking state, residual ~1e-2 at every level, which the residual test reports).
+
+Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
+
+* shape modes 8 <= n_modes, max_modes, rung_modes <= :data:`MAX_MODES` = 96 (the long
+  vesicle at (0.6, 0.98 λc) needs 64; a level of N modes has max(8, ceil(N/3)) panels and a
+  difference Jacobian costs N BEM evaluations, ~0.1–0.5 s each, so 96 modes is already
+  ~1 min per Jacobian); peak memory stays below 0.5 GB.
+* :data:`CA_B_MIN` = 0.01 <= Ca_B <= :data:`CA_B_MAX` = 1e5, the range of the lubrication
+  solver that provides the initial shape (:mod:`lubrication.solve`; at 1e5 bending is within
+  1e-6 of the high-Ca model). Ca_B = ηUR0²/κ is ~1–1000 for red blood cells (Chen et al.
+  2020 use 50). Measured at (0.9, 1.0), 16 modes: Ca_B = 0.01 converges in 21 s; Ca_B = 1e308
+  (bending load ~1e-308) used to run to a failed solve.
+* ``max_time`` (:class:`lubrication.checks.Deadline`) is tested between BEM evaluations of
+  Levenberg–Marquardt, between levels and between continuation rungs; when spent the result
+  has ``success`` False and the deadline's message. Each level does at most ``max_iter``
+  (40; valley: 320) iterations and 4–8 difference Jacobians.
 """
 
 from __future__ import annotations
@@ -84,7 +100,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.interpolate import CubicSpline
 
-from lubrication.checks import InvalidParameterError, check_positive, check_range
+from lubrication.checks import Deadline, InvalidParameterError, check_positive, check_range
 from lubrication.geometry import critical_length, resolve_confinement
 
 from .assembly import poiseuille
@@ -100,13 +116,19 @@ from .shape import (
     spheroid_curve,
 )
 
-__all__ = ["NEAR_CRITICAL", "WALL_REFINEMENT", "VesicleOperator", "capsule_seed",
+__all__ = ["CA_B_MAX", "CA_B_MIN", "MAX_MODES", "NEAR_CRITICAL", "WALL_REFINEMENT",
+           "check_vesicle_inputs", "VesicleOperator", "capsule_seed",
            "fit_lubrication", "lubrication_seed", "mode_convergence", "seed_from_lubrication",
            "solve_vesicle", "spheroid_seed", "vesicle_discretisation"]
 
 log = logging.getLogger(__name__)
 
 _EIGHT_PI = 8.0 * math.pi
+
+#: most shape modes of one level (resource envelope, module docstring)
+MAX_MODES = 96
+#: bending capillary numbers accepted (module docstring)
+CA_B_MIN, CA_B_MAX = 1e-2, 1e5
 
 
 # ---------------------------------------------------------------------------- operator
@@ -265,13 +287,18 @@ def vesicle_discretisation(n_modes: int, order: int = DEFAULT_ORDER,
 
 # ---------------------------------------------------------------------------- initial shapes
 def lubrication_seed(nu: float, lam: float, ca_b: float, n_modes: int,
-                     density: str = "uniform", density_terms: int = 16):
+                     density: str = "uniform", density_terms: int = 16,
+                     max_time: float | None = None):
     """Spectral curve fitted to the lubrication solution at (nu, lam, ca_b) (see
-    :func:`seed_from_lubrication`); None if the solver fails or the fit is rejected. Returns
-    (curve, lubrication result)."""
+    :func:`seed_from_lubrication`); None if the solver fails (or runs out of ``max_time``
+    seconds) or the fit is rejected. Returns (curve, lubrication result)."""
     from lubrication.solve import solve_lubrication
 
-    lub = solve_lubrication(nu, lam, ca_b=ca_b)
+    try:
+        lub = solve_lubrication(nu, lam, ca_b=ca_b, max_time=max_time)
+    except InvalidParameterError as exc:         # outside the lubrication model's range
+        log.info("no lubrication seed: %s", exc)
+        return None, None
     if not lub.success:
         return None, lub
     return seed_from_lubrication(lub, n_modes, density, density_terms), lub
@@ -358,7 +385,7 @@ def capsule_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
 
 # ---------------------------------------------------------------------------- one level
 def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, max_iter,
-                 seed_level=False, valley=False, carrier=False):
+                 seed_level=False, valley=False, carrier=False, deadline=None):
     """Levenberg–Marquardt at one resolution from ``seed``
     (:func:`bem.newton.valley_levenberg_marquardt` if ``valley``, with 8 ``max_iter`` cheap
     iterations, else :func:`bem.newton.levenberg_marquardt`); returns (state, op, info).
@@ -375,11 +402,11 @@ def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, m
 
     if valley:
         rep = valley_levenberg_marquardt(fun, op.free(template), tol=xtol,
-                                         max_iter=8 * max_iter,
+                                         max_iter=8 * max_iter, deadline=deadline,
                                          max_jacobians=1 if carrier else 2 if seed_level else 4)
     else:
         rep = levenberg_marquardt(fun, op.free(template), tol=xtol, max_iter=max_iter,
-                                  max_jacobians=3 if seed_level else 8,
+                                  max_jacobians=3 if seed_level else 8, deadline=deadline,
                                   stall=0.9 if seed_level else None, floor_ratio=0.99)
     if rep.payload is None:
         raise InvalidParameterError("initial", "a shape rejected by the operator", rep.message)
@@ -463,9 +490,47 @@ def _check_inputs(nu, lam, lam_ratio, ca_b):
     nu, lam, lam_c = resolve_confinement(
         nu, lam, lam_ratio, nu_reason="a vesicle with excess area (nu < 1) is needed")
     ca_b = float(check_positive("ca_b", ca_b, reason="Ca_B = eta U R0^2/kappa"))
-    if not math.isfinite(ca_b):
-        raise InvalidParameterError("ca_b", ca_b, "a finite positive number")
+    if not CA_B_MIN <= ca_b <= CA_B_MAX:
+        raise InvalidParameterError(
+            "ca_b", ca_b, f"{CA_B_MIN:g} <= ca_b <= {CA_B_MAX:g}",
+            "Ca_B = eta U R0^2/kappa; outside it the membrane is rigid, or bending negligible, "
+            "to within the solver's accuracy (red blood cells: Ca_B ~ 1-1000)")
     return nu, lam, lam_c, ca_b
+
+
+def _mode_count(name, value) -> int:
+    """An integer number of shape modes, 8 <= value <= MAX_MODES."""
+    value = check_range(name, value, 8, MAX_MODES,
+                        reason="more modes exceed the resource envelope of one level "
+                               "(time per difference Jacobian, memory)")
+    if float(value) != int(value):
+        raise InvalidParameterError(name, float(value), f"an integer, 8 <= {name} <= "
+                                                        f"{MAX_MODES}")
+    return int(value)
+
+
+def check_vesicle_inputs(nu, lam=None, *, lam_ratio=None, ca_b=50.0, n_modes=None,
+                         tol=1e-4, residual_tol=1e-4, max_modes=None, rung_modes=24,
+                         density_terms=16, max_iter=40, max_time=None):
+    """Check the inputs of :func:`solve_vesicle` (ranges and the resource envelope of the module
+    docstring) without any BEM work. Returns (nu, lam, lam_c, ca_b, n_modes, tol,
+    residual_tol, max_modes, rung_modes, density_terms, max_iter) as Python numbers
+    (``max_modes`` None stays None: chosen from the vesicle's length). Raises
+    :class:`InvalidParameterError` (or CannotPassError for lam >= lam_c) naming the input."""
+    nu, lam, lam_c, ca_b = _check_inputs(nu, lam, lam_ratio, ca_b)
+    tol = float(check_range("tol", tol, 1e-12, 0.5))
+    residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 10.0))
+    if max_modes is not None:
+        max_modes = _mode_count("max_modes", max_modes)
+    if n_modes is not None:
+        n_modes = _mode_count("n_modes", n_modes)
+    rung_modes = _mode_count("rung_modes", rung_modes)
+    density_terms = int(check_range("density_terms", density_terms, 1, 64))
+    max_iter = int(check_range("max_iter", max_iter, 1, 1000))
+    if max_time is not None:
+        Deadline(max_time)                               # 0 < max_time < inf
+    return (nu, lam, lam_c, ca_b, n_modes, tol, residual_tol, max_modes, rung_modes,
+            density_terms, max_iter)
 
 
 def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | None = None,
@@ -474,7 +539,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                   order: int = DEFAULT_ORDER, xtol: float = 1e-9, max_iter: int = 40,
                   density: str = "auto", density_terms: int = 16,
                   continuation: bool | None = None, rung_modes: int = 24,
-                  valley: bool | None = None):
+                  valley: bool | None = None, max_time: float | None = None):
     r"""Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the tube axis.
 
     Parameters
@@ -484,7 +549,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     lam, lam_ratio : float
         Confinement R0/R, or lam/lam_c; exactly one, 0 < lam < lam_c(nu) [-].
     ca_b : float
-        Bending capillary number ηUR0²/κ (Chen et al. 2020 use 50) [-].
+        Bending capillary number ηUR0²/κ (Chen et al. 2020 use 50), CA_B_MIN = 1e-3 <= ca_b
+        <= CA_B_MAX = 1e6 [-].
     initial : VesicleResult, SpectralCurve or LubricationResult, optional
         Initial shape. Default: the lubrication solution at the same parameters, else a
         prolate spheroid of the right nu.
@@ -531,6 +597,10 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         Jacobian updates and extrapolation along the slow cap-to-cap mode) instead of
         :func:`bem.newton.levenberg_marquardt`. Default: on for a long vesicle, whose plain
         solve stops far from the minimum (at (0.6, 1.94): γ_max 799 instead of 932).
+    max_time : float, optional
+        Wall-time budget [s] (:class:`lubrication.checks.Deadline`), tested between BEM
+        evaluations, levels and continuation rungs; when spent the result has ``success``
+        False. Default: no limit. Mode counts are at most MAX_MODES = 96.
 
     Returns
     -------
@@ -548,7 +618,13 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     from .results import VesicleResult
 
     t_start = time.perf_counter()
-    nu, lam, lam_c, ca_b = _check_inputs(nu, lam, lam_ratio, ca_b)
+    (nu, lam, lam_c, ca_b, n_modes, tol, residual_tol, max_modes, rung_modes, density_terms,
+     max_iter) = check_vesicle_inputs(nu, lam, lam_ratio=lam_ratio, ca_b=ca_b, n_modes=n_modes,
+                                      tol=tol, residual_tol=residual_tol, max_modes=max_modes,
+                                      rung_modes=rung_modes, density_terms=density_terms,
+                                      max_iter=max_iter, max_time=max_time)
+    deadline = Deadline(max_time)
+    clock = time.monotonic()
     if density not in ("auto", "uniform", *_DENSITIES):
         raise InvalidParameterError("density", density,
                                     '"auto", "uniform", "curvature", "bend" or "film"')
@@ -561,13 +637,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         valley = long
     if density == "auto":
         density = "bend" if long else "film" if ratio >= NEAR_CRITICAL else "uniform"
-    tol = float(check_range("tol", tol, 1e-12, 0.5))
-    residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 10.0))
     if max_modes is None:
-        max_modes = max(40, 8 * round(0.75 * ell)) if long else 40
-    max_modes = int(check_range("max_modes", max_modes, 8, 256))
+        max_modes = min(MAX_MODES, max(40, 8 * round(0.75 * ell)) if long else 40)
     if n_modes is not None:
-        n_modes = int(check_range("n_modes", n_modes, 8, 256))
         sequence = [max(6, round(2 * n_modes / 3)), n_modes]
     else:
         sequence = list(range(16, max_modes + 1, 8))
@@ -575,14 +647,24 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             sequence = list(range(16, max_modes - 15, 16)) + [max_modes - 8, max_modes]
     seed_source = "initial"
     rung_log = {}
-    density_terms = int(check_range("density_terms", density_terms, 1, 64))
+
+    def timed_out(what: str):
+        return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=False, tol=tol,
+                             residual_tol=residual_tol, iterations=dict(rung_log),
+                             timings={"total_s": time.perf_counter() - t_start},
+                             message=f"{deadline.message()} ({what})")
     if continuation:
-        rung_kw = {"ca_b": ca_b, "n_modes": int(check_range("rung_modes", rung_modes, 8, 256)),
+        rung_kw = {"ca_b": ca_b, "n_modes": rung_modes,
                    "tol": 0.5, "residual_tol": 10.0, "order": order, "density": density,
                    "density_terms": density_terms, "continuation": False}
         rung = None
         for q in _rungs(ratio):
-            rung = solve_vesicle(nu, lam_ratio=q, initial=rung, **rung_kw)
+            left = None if max_time is None else max_time - (time.monotonic() - clock)
+            if left is not None and left <= 0.0:
+                return timed_out(f"continuation rung lam/lam_c = {q:g}")
+            rung = solve_vesicle(nu, lam_ratio=q, initial=rung, max_time=left, **rung_kw)
+            if deadline.expired():
+                return timed_out(f"continuation rung lam/lam_c = {q:g}")
             rung_log[f"rung{q:g}"] = {
                 "evaluations": sum(v["evaluations"] for v in rung.iterations.values()),
                 "seconds": rung.timings.get("total_s", math.nan), "residual": rung.residual}
@@ -598,12 +680,15 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             initial = rung
             seed_source = f"continuation (lam/lam_c = {', '.join(f'{r:g}' for r in _rungs(ratio))})"
     from_lubrication = False                         # the seed is already fitted with density
+    if deadline.expired():
+        return timed_out("before the seed")
     if isinstance(initial, SpectralCurve):
         seed = initial
     elif isinstance(initial, LubricationResult) or initial is None:
         seed = None
         if initial is None:
-            seed, _ = lubrication_seed(nu, lam, ca_b, sequence[0], density, density_terms)
+            seed, _ = lubrication_seed(nu, lam, ca_b, sequence[0], density, density_terms,
+                                       max_time=deadline.remaining())
             seed_source = "lubrication"
         elif initial.success:
             seed = seed_from_lubrication(initial, sequence[0], density, density_terms)
@@ -633,6 +718,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     # (at (0.6, 1.94) the pair's V/U, dp+ and gamma_max are those of the full ladder to 2e-6)
     pair_from = len(sequence) - 2 if valley and n_modes is None else 0
     for i, n in enumerate(sequence):
+        if deadline.expired():
+            message = f"{deadline.message()} (before the level with {n} modes)"
+            break
         disc = vesicle_discretisation(n, order)
         t0 = time.perf_counter()
         if pair_from and i == len(sequence) - 1 and density != "uniform":
@@ -643,7 +731,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         try:
             st, op, info = _solve_level(nu, lam, ca_b, disc, prev, n, xtol=xtol,
                                         max_iter=max_iter, seed_level=not levels,
-                                        valley=valley, carrier=i < pair_from)
+                                        valley=valley, carrier=i < pair_from,
+                                        deadline=deadline)
         except InvalidParameterError as exc:
             message = f"level with {n} modes: {exc}"
             break
@@ -655,6 +744,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                  "residual %.2e (%s)", nu, lam, n, out["V_over_U"], out["dp_plus_R0"],
                  out["tension_max"], out["residual"], info["message"])
         if not info["success"]:
+            if deadline.expired():
+                message = f"{deadline.message()} (in the level with {n} modes)"
+                break
             if n == sequence[-1]:
                 message = f"Levenberg–Marquardt failed with {n} modes: {info['message']}"
                 break

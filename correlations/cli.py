@@ -14,28 +14,39 @@ from __future__ import annotations
 import argparse
 import sys
 import warnings
+from contextlib import contextmanager
 
-from lubrication.checks import InvalidParameterError, OutOfRangeWarning, check_positive
+from lubrication.checks import (InvalidParameterError, OutOfRangeWarning, check_fraction,
+                                check_positive, check_range)
 from lubrication.cli_contract import (EXIT_INTERRUPTED, EXIT_INVALID, EXIT_NOT_CONVERGED, EXIT_OK,
                                       Parser, UsageError, check_output_dir, check_plot_path,
                                       dump_json, format_rows, interrupted_message,
                                       non_finite_keys, quiet_broken_pipe, save_plot)
 
-# Human labels of the output keys (key -> label); keys not listed are printed as they are.
+# Human labels of the output keys (key -> label); keys not listed are printed as they are. A
+# label names the quantity; the "unit" column says what its value is measured in (below).
 LABELS = {
     "nu": "reduced volume nu", "lam": "confinement lam = R0/R", "lam_c": "critical confinement lam_c",
-    "ell_c": "critical length ell_c = L_c/R_c", "delta": "clearance delta = 1 - lam/lam_c",
+    "ell_c": "critical length L_c", "delta": "clearance delta = 1 - lam/lam_c",
     "passes": "passes the tube intact", "R0_um": "volume radius R0", "d_c_um": "critical diameter d_c",
-    "L_c_um": "critical length L_c", "ca_b": "bending capillary number Ca_B",
-    "V_over_U": "speed V/U", "V_mm_s": "cell speed V", "film": "film thickness h/R",
-    "film_nm": "film thickness h", "ell": "length ell = L/R", "length_um": "length L",
-    "dp_plus_R0": "extra pressure drop dp+ R0/(eta U)", "dp_plus_R": "extra pressure drop dp+ R/(eta U)",
+    "L_c_um": "critical length L_c", "ca_b": "bending capillary number Ca_B = eta U R0^2/kappa",
+    "V_over_U": "speed V/U", "V_mm_s": "cell speed V", "film": "film thickness h",
+    "film_nm": "film thickness h", "ell": "length L", "length_um": "length L",
+    "dp_plus_R0": "extra pressure drop dp+", "dp_plus_R": "extra pressure drop dp+",
     "dp_plus_Pa": "extra pressure drop dp+", "shape_class": "shape class",
-    "tension_front": "front tension gamma_F/(eta V)", "tension_front_etaU": "front tension gamma_F/(eta U)",
+    "tension_front": "front tension gamma_F", "tension_front_etaU": "front tension gamma_F",
     "tension_front_mN_m": "front tension gamma_F", "tube_hematocrit": "tube hematocrit H_T",
     "discharge_hematocrit": "discharge hematocrit H_D", "eta_rel": "relative apparent viscosity",
     "reduced_area_excess": "reduced excess area 4pi(nu^-2/3 - 1)", "nu_c": "largest nu passing (nu_c)",
+    "diameter_um": "tube diameter d", "ratio_HT_over_HD": "Fahraeus ratio H_T/H_D",
 }
+
+#: The "unit" column of every table holds either a physical unit (um, mm/s, Pa, nm, mN/m) or
+#: the scale a dimensionless value is measured in ("R": the value is h/R; "eta U/R0": the value
+#: is dp+ R0/(eta U); "R_c", "eta V", "eta U"), "-" for a plain dimensionless number and "" for
+#: a non-number (yes/no, a name). The estimate's units are correlations.estimate.UNITS.
+UNIT_CONVENTION = ('unit column: a physical unit, or the scale of a dimensionless value (e.g. '
+                   '"R": h is given as h/R); "-": plain dimensionless')
 
 # Order of rows in the human estimate table.
 ESTIMATE_ROWS = ("nu", "lam", "lam_c", "delta", "ell_c", "passes", "R0_um", "d_c_um", "L_c_um",
@@ -43,6 +54,32 @@ ESTIMATE_ROWS = ("nu", "lam", "lam_c", "delta", "ell_c", "passes", "R0_um", "d_c
                  "dp_plus_Pa", "film", "film_nm", "ell", "length_um", "tension_front",
                  "tension_front_etaU", "tension_front_mN_m", "tube_hematocrit",
                  "discharge_hematocrit", "eta_rel")
+
+# The option a user types for each parameter name of the library (messages name the option).
+OPTIONS = {
+    "nu": "--nu", "lam": "--lam", "ca_b": "--ca-b", "volume_fl": "--volume-fl",
+    "area_um2": "--area-um2", "diameter_um": "--diameter-um", "velocity_mm_s": "--velocity-mm-s",
+    "plasma_viscosity_mpas": "--plasma-viscosity-mpas", "bending_modulus_j": "--bending-modulus-j",
+    "hematocrit": "--hematocrit", "hematocrit_kind": "--hematocrit-kind", "solvers": "--solver",
+    "law": "--law", "constants": "--constants",
+}
+
+
+@contextmanager
+def _options(args, **renamed):
+    """Re-raise an :class:`InvalidParameterError` of the library as a usage error that starts
+    with the command-line option behind the parameter (``--velocity-mm-s: velocity_mm_s=...``),
+    marked "(default)" when the user did not type it. ``renamed`` maps further parameter names
+    to options (``tube_hematocrit="--hematocrit"``)."""
+    try:
+        yield
+    except InvalidParameterError as exc:
+        option = renamed.get(exc.name) or OPTIONS.get(exc.name)
+        if option is None:
+            raise
+        dest = option.lstrip("-").replace("-", "_")
+        typed = getattr(args, dest, None) is not None
+        raise UsageError(f"{option}{'' if typed else ' (default)'}: {exc}") from None
 
 
 def _quantity_rows(quantities: dict, keys) -> list:
@@ -58,38 +95,55 @@ def _quantity_rows(quantities: dict, keys) -> list:
     return rows
 
 
+def _unphysical(quantity: str, value) -> str:
+    """Why ``value`` may not be reported as ``quantity`` ("" if it may): the output checks of
+    :func:`correlations.registry.check_output` (finite, within the physical bounds)."""
+    from .registry import check_output
+    return check_output(quantity, value, {}) if value is not None else ""
+
+
 # --------------------------------------------------------------------------- commands
 
 def cmd_geometry(args) -> dict:
     from lubrication import geometry as g
+
+    from .estimate import PHYSICAL_BOUNDS
     if args.nu is not None and (args.volume_fl is not None or args.area_um2 is not None):
         raise UsageError("give either --nu or --volume-fl/--area-um2, not both")
-    if args.nu is None:
-        if args.volume_fl is None or args.area_um2 is None:
-            raise UsageError("give --nu NU, or both --volume-fl V and --area-um2 A")
-        nu, R0 = g.cell_from_volume_area(args.volume_fl, args.area_um2)
-        lam = None if args.diameter_um is None else g.confinement_from_diameter(R0, args.diameter_um)
-    else:
-        nu, R0 = float(args.nu), None
-        if args.diameter_um is not None:
-            raise UsageError("--diameter-um goes with --volume-fl/--area-um2; use --lam with --nu")
-        lam = args.lam
-    lam_c, ell_c = g.critical_confinement(nu), g.critical_length(nu)
+    with _options(args):
+        if args.nu is None:
+            if args.volume_fl is None or args.area_um2 is None:
+                raise UsageError("give --nu NU, or both --volume-fl V and --area-um2 A")
+            for name in ("volume_fl", "diameter_um"):
+                value = getattr(args, name)
+                if value is not None:
+                    lo, hi, reason = PHYSICAL_BOUNDS[name]
+                    check_range(name, check_positive(name, value), lo, hi, reason=reason)
+            nu, R0 = g.cell_from_volume_area(args.volume_fl, args.area_um2)
+            lam = (None if args.diameter_um is None
+                   else g.confinement_from_diameter(R0, args.diameter_um))
+        else:
+            nu, R0 = float(g.check_reduced_volume(args.nu)), None
+            if args.diameter_um is not None:
+                raise UsageError("--diameter-um goes with --volume-fl/--area-um2; use --lam with --nu")
+            lam = None if args.lam is None else float(check_positive("lam", args.lam))
+        lam_c, ell_c = g.critical_confinement(nu), g.critical_length(nu)
     out = {"command": "geometry", "converged": True, "nu": nu, "lam_c": lam_c, "ell_c": ell_c,
            "reduced_area_excess": g.reduced_area_excess(nu)}
     if R0 is not None:
-        out.update(R0_um=R0, d_c_um=g.critical_diameter_um(nu, R0), L_c_um=g.critical_length_um(nu, R0))
+        out.update(R0_um=R0, d_c_um=g.critical_diameter_um(nu, R0),
+                   L_c_um=g.critical_length_um(nu, R0))
     if lam is not None:
-        lam = float(check_positive("lam", lam))
         passes = bool(lam < lam_c)
         out.update(lam=lam, passes=passes, delta=(1.0 - lam / lam_c) if passes else None)
         if lam >= 1.0:
             out["nu_c"] = g.critical_reduced_volume(lam)
-    units = {"R0_um": "um", "d_c_um": "um", "L_c_um": "um"}
+    units = {"R0_um": "um", "d_c_um": "um", "L_c_um": "um", "ell_c": "R_c", "passes": ""}
     inputs = {"nu", "lam"} if R0 is None else set()
-    rows = [(LABELS.get(k, k), v, units.get(k, "-"), "input" if k in inputs else "Chen et al. 2020 §III", "")
+    rows = [(LABELS.get(k, k), v, units.get(k, "-"),
+             "input" if k in inputs else "Chen et al. 2020 §III", "")
             for k, v in out.items() if k not in ("command", "converged")]
-    return out, format_rows(rows, "Geometry of confinement")
+    return out, format_rows(rows, "Geometry of confinement") + "\n" + UNIT_CONVENTION
 
 
 def cmd_estimate(args) -> dict:
@@ -103,8 +157,9 @@ def cmd_estimate(args) -> dict:
         if args.nu is None or args.lam is None:
             raise UsageError("give both --nu and --lam for the dimensionless estimate")
         h = {f"{args.hematocrit_kind}_hematocrit": args.hematocrit} if args.hematocrit is not None else {}
-        est = estimate_dimensionless(args.nu, args.lam, args.ca_b, extrapolate=args.extrapolate,
-                                     solvers=tuple(args.solver), **h)
+        with _options(args, tube_hematocrit="--hematocrit", discharge_hematocrit="--hematocrit"):
+            est = estimate_dimensionless(args.nu, args.lam, args.ca_b, extrapolate=args.extrapolate,
+                                         solvers=tuple(args.solver), **h)
         title = f"Dimensionless estimate: nu = {args.nu:g}, lam = {args.lam:g}"
     else:
         if args.ca_b is not None:
@@ -112,8 +167,9 @@ def cmd_estimate(args) -> dict:
         kw = {k: getattr(args, k) for k in ("volume_fl", "area_um2", "diameter_um", "velocity_mm_s",
                                             "plasma_viscosity_mpas", "bending_modulus_j")
               if getattr(args, k) is not None}
-        est = estimate(**kw, hematocrit=args.hematocrit, hematocrit_kind=args.hematocrit_kind,
-                       extrapolate=args.extrapolate, solvers=tuple(args.solver))
+        with _options(args):
+            est = estimate(**kw, hematocrit=args.hematocrit, hematocrit_kind=args.hematocrit_kind,
+                           extrapolate=args.extrapolate, solvers=tuple(args.solver))
         i = est.inputs
         title = (f"Engineering estimate: cell {i['volume_fl']:g} fL, {i['area_um2']:g} um^2 in a "
                  f"{i['diameter_um']:g} um tube; U = {i['velocity_mm_s']:g} mm/s, eta = "
@@ -123,7 +179,8 @@ def cmd_estimate(args) -> dict:
     why = [f"  {k}: {est.quantities[k].note}" for k in QUANTITIES
            if est.quantities[k].value is None and est.quantities[k].note.startswith("no valid")]
     human = "\n".join([format_rows(_quantity_rows(est.quantities, ESTIMATE_ROWS), title),
-                       f"\nregime: {est.regime}"] + [f"note: {n}" for n in est.notes] +
+                       UNIT_CONVENTION, f"\nregime: {est.regime}"] +
+                      [f"note: {n}" for n in est.notes] +
                       (["why no value:"] + why if why else []) +
                       ["methods and validity ranges: correlations/registry.py, docs/user-guide.md"])
     if args.plot:
@@ -138,38 +195,56 @@ def cmd_viscosity(args) -> dict:
     d, h, kind = args.diameter_um, args.hematocrit, args.hematocrit_kind
     if law == "single-file":
         return _single_file_viscosity(args)
-    if kind == "tube":
-        h_t = h
-        h_d = v.discharge_hematocrit_fahraeus(d, h, constants=args.constants)
-    else:
-        h_d = h
-        h_t = v.tube_hematocrit_fahraeus(d, h, constants=args.constants)
-    eta = v.relative_viscosity(d, h_d, law=law)
+    notes = []
+    with _options(args, tube_hematocrit="--hematocrit", discharge_hematocrit="--hematocrit"):
+        d = float(check_positive("diameter_um", d))
+        if kind == "tube":      # H_D is needed by the law: an unphysical conversion is an error
+            h_t = float(check_fraction("tube_hematocrit", h))
+            h_d = v.discharge_hematocrit_fahraeus(d, h_t, constants=args.constants)
+        else:                   # H_T is only reported: where the fit is unphysical it is missing
+            h_d = float(check_fraction("discharge_hematocrit", h))
+            h_t = None
+            if d > v.FAHRAEUS_MIN_DIAMETER_UM[args.constants]:
+                h_t = v.tube_hematocrit_fahraeus(d, h_d, constants=args.constants)
+            else:
+                notes.append(f"no tube hematocrit: below d = "
+                             f"{v.FAHRAEUS_MIN_DIAMETER_UM[args.constants]:.4g} um the "
+                             f"{args.constants} Fahraeus fit gives H_T > H_D, which is impossible")
+        eta = v.relative_viscosity(d, h_d, law=law)
+    problem = _unphysical("eta_rel", eta)
+    if problem:
+        notes.append(f"no eta_rel: {problem}")
+        eta = None
     out = {"command": "viscosity", "converged": True, "law": law, "diameter_um": d,
            "discharge_hematocrit": h_d, "tube_hematocrit": h_t, "eta_rel": eta,
            "fahraeus_constants": args.constants}
-    rows = [("law", law, "", "", ""), ("diameter", d, "um", "input", ""),
+    if notes:
+        out["warnings"] = notes
+    fahraeus = f"Fahraeus ({args.constants})"
+    rows = [("law", law, "", "", ""), (LABELS["diameter_um"], d, "um", "input", ""),
             (LABELS["discharge_hematocrit"], h_d, "-", "input" if kind == "discharge" else
-             f"Fahraeus ({args.constants})", ""),
-            (LABELS["tube_hematocrit"], h_t, "-", "input" if kind == "tube" else
-             f"Fahraeus ({args.constants})", ""),
-            (LABELS["eta_rel"], eta, "-", law, "")]
+             fahraeus, ""),
+            (LABELS["tube_hematocrit"], h_t, "-", "input" if kind == "tube" else fahraeus,
+             "" if h_t is not None else "Fahraeus fit not meaningful here"),
+            (LABELS["eta_rel"], eta, "-", law, "" if eta is not None else "rejected")]
     if args.plot:
         from .plotting import plot_relative_viscosity
         save_plot(plot_relative_viscosity(hematocrits=(h_d,)), args.plot)
-    return out, format_rows(rows, f"Relative apparent viscosity ({law})")
+    return out, format_rows(rows, f"Relative apparent viscosity ({law})") + "\n" + UNIT_CONVENTION
 
 
 def _single_file_viscosity(args) -> dict:
     """Chen et al. 2020 single-file model with the estimate's dp+ for an RBC at that diameter.
 
     Only this law is used: where the estimate has no valid dp+ the result is null with the
-    reason (or a flagged extrapolation with --extrapolate), never another law's number.
+    reason (or a flagged extrapolation with --extrapolate), never another law's number. The
+    law's diameter range is its stored validity range, viscosity.CHEN2020_RANGE.
     """
     from .estimate import estimate
-    from .viscosity import viscosity_single_file_chen2020
-    est = estimate(diameter_um=args.diameter_um, hematocrit=args.hematocrit,
-                   hematocrit_kind=args.hematocrit_kind, extrapolate=args.extrapolate)
+    from .viscosity import CHEN2020_RANGE, viscosity_single_file_chen2020
+    with _options(args):
+        est = estimate(diameter_um=args.diameter_um, hematocrit=args.hematocrit,
+                       hematocrit_kind=args.hematocrit_kind, extrapolate=args.extrapolate)
     dp, h_t = est.quantities["dp_plus_R0"], est.quantities["tube_hematocrit"]
     eta, note = None, ""
     if dp.value is None:
@@ -177,20 +252,30 @@ def _single_file_viscosity(args) -> dict:
     elif h_t.value is None:
         note = f"no tube hematocrit: {h_t.note}"
     else:
-        eta = viscosity_single_file_chen2020(dp.value, args.diameter_um, est["R0_um"], h_t.value)
-    valid = eta is not None and dp.valid and h_t.valid and args.diameter_um <= 8.0
+        with _options(args):
+            eta = viscosity_single_file_chen2020(dp.value, args.diameter_um, est["R0_um"], h_t.value)
+        problem = _unphysical("eta_rel", eta)
+        if problem:
+            eta, note = None, f"no eta_rel: {problem}"
+    in_range = CHEN2020_RANGE.contains(diameter_um=args.diameter_um)
+    valid = eta is not None and dp.valid and h_t.valid and in_range
     out = {"command": "viscosity", "converged": True, "law": "single-file (Chen et al. 2020 §IV.D)",
            "diameter_um": args.diameter_um, "eta_rel": eta, "valid": valid,
            "tube_hematocrit": h_t.value, "discharge_hematocrit": est["discharge_hematocrit"],
            "dp_plus_R0": dp.value, "dp_plus_method": dp.method, "note": note,
-           "cell": "RBC defaults (90 fL, 135 um^2)"}
+           "validity": CHEN2020_RANGE.describe(), "cell": "RBC defaults (90 fL, 135 um^2)"}
     if note:
         out["warnings"] = [note]
-    rows = [("law", out["law"], "", "", ""), ("diameter", args.diameter_um, "um", "input", ""),
+    elif eta is not None and not in_range:
+        out["warnings"] = [f"single-file law used at diameter_um={args.diameter_um:g}, outside "
+                           f"{CHEN2020_RANGE.describe()}; the value is extrapolated"]
+    rows = [("law", out["law"], "", "", ""),
+            (LABELS["diameter_um"], args.diameter_um, "um", "input", ""),
             *_quantity_rows(est.quantities, ("tube_hematocrit", "discharge_hematocrit", "dp_plus_R0")),
             (LABELS["eta_rel"], eta, "-", "single-file (Chen 2020)",
              "" if valid else ("no valid dp+" if eta is None else "EXTRAPOLATED (outside validity)"))]
-    return out, format_rows(rows, "Apparent viscosity (single-file vesicle model, RBC defaults)")
+    return out, (format_rows(rows, "Apparent viscosity (single-file vesicle model, RBC defaults)")
+                 + "\n" + UNIT_CONVENTION)
 
 
 def cmd_fahraeus(args) -> dict:
@@ -198,24 +283,32 @@ def cmd_fahraeus(args) -> dict:
     d = args.diameter_um
     if (args.discharge_hematocrit is None) == (args.tube_hematocrit is None):
         raise UsageError("give exactly one of --discharge-hematocrit H, --tube-hematocrit H")
-    if args.discharge_hematocrit is not None:
-        h_d = args.discharge_hematocrit
-        h_t = v.tube_hematocrit_fahraeus(d, h_d, constants=args.constants)
-    else:
-        h_t = args.tube_hematocrit
-        h_d = v.discharge_hematocrit_fahraeus(d, h_t, constants=args.constants)
+    with _options(args, discharge_hematocrit="--discharge-hematocrit",
+                  tube_hematocrit="--tube-hematocrit"):
+        if args.discharge_hematocrit is not None:
+            h_d = args.discharge_hematocrit
+            h_t = v.tube_hematocrit_fahraeus(d, h_d, constants=args.constants)
+        else:
+            h_t = args.tube_hematocrit
+            h_d = v.discharge_hematocrit_fahraeus(d, h_t, constants=args.constants)
+        # the ratio from the fit itself (exact even for tiny hematocrits), always <= 1
+        ratio = v.hematocrit_ratio_fahraeus(d, h_d, constants=args.constants)
     out = {"command": "fahraeus", "converged": True, "constants": args.constants, "diameter_um": d,
-           "discharge_hematocrit": h_d, "tube_hematocrit": h_t, "ratio_HT_over_HD": h_t / h_d if h_d else None}
-    rows = [(LABELS["discharge_hematocrit"], h_d, "-", f"Fahraeus ({args.constants})", ""),
-            (LABELS["tube_hematocrit"], h_t, "-", f"Fahraeus ({args.constants})", ""),
-            ("H_T/H_D", out["ratio_HT_over_HD"], "-", "", "")]
-    return out, format_rows(rows, f"Fahraeus effect in a {d:g} um tube")
+           "discharge_hematocrit": h_d, "tube_hematocrit": h_t, "ratio_HT_over_HD": ratio}
+    method = f"Fahraeus ({args.constants})"
+    rows = [(LABELS["diameter_um"], d, "um", "input", ""),
+            (LABELS["discharge_hematocrit"], h_d, "-",
+             "input" if args.discharge_hematocrit is not None else method, ""),
+            (LABELS["tube_hematocrit"], h_t, "-",
+             "input" if args.tube_hematocrit is not None else method, ""),
+            (LABELS["ratio_HT_over_HD"], ratio, "-", method, "")]
+    return out, format_rows(rows, f"Fahraeus effect in a {d:g} um tube") + "\n" + UNIT_CONVENTION
 
 
 # --------------------------------------------------------------------------- parser
 
 def build_parser() -> argparse.ArgumentParser:
-    from .estimate import RBC_DEFAULTS
+    from .estimate import PHYSICAL_BOUNDS, RBC_DEFAULTS
     from .registry import SOLVERS
     p = Parser(prog="vesicle-tube", description="Vesicles and red blood cells in narrow tubes "
                 "(Stokes flow): geometry, engineering estimates, apparent viscosity.")
@@ -226,27 +319,39 @@ def build_parser() -> argparse.ArgumentParser:
 
     g = sub.add_parser("geometry", help="critical confinement, length and diameter")
     g.add_argument("--nu", type=float, help="reduced volume, 0 < nu <= 1 [-]")
-    g.add_argument("--lam", type=float, help="confinement R0/R [-] (with --nu)")
-    g.add_argument("--volume-fl", type=float, help="cell volume [fL = um^3]")
+    g.add_argument("--lam", type=float, help="confinement R0/R > 0 [-] (with --nu)")
+    g.add_argument("--volume-fl", type=float, help="cell volume [fL = um^3], 1e-6 to 1e12")
     g.add_argument("--area-um2", type=float, help="membrane area [um^2]")
-    g.add_argument("--diameter-um", type=float, help="tube diameter [um] (with --volume-fl/--area-um2)")
+    g.add_argument("--diameter-um", type=float,
+                   help="tube diameter [um], 1e-3 to 1e7 (with --volume-fl/--area-um2)")
     common(g)
     g.set_defaults(func=cmd_geometry)
 
     e = sub.add_parser("estimate", help="engineering estimate (default: human RBC in a 4 um capillary)")
-    d = RBC_DEFAULTS
-    e.add_argument("--volume-fl", type=float, help=f"cell volume [fL] (default {d['volume_fl']:g})")
-    e.add_argument("--area-um2", type=float, help=f"membrane area [um^2] (default {d['area_um2']:g})")
-    e.add_argument("--diameter-um", type=float, help=f"tube diameter [um] (default {d['diameter_um']:g})")
+    d, b = RBC_DEFAULTS, PHYSICAL_BOUNDS
+
+    def bounds(name):
+        return f"{b[name][0]:g} to {b[name][1]:g}"
+    e.add_argument("--volume-fl", type=float,
+                   help=f"cell volume [fL], {bounds('volume_fl')} (default {d['volume_fl']:g})")
+    e.add_argument("--area-um2", type=float, help=f"membrane area [um^2], from the sphere of that "
+                   f"volume to reduced volume 1e-6 (default {d['area_um2']:g})")
+    e.add_argument("--diameter-um", type=float, help=f"tube diameter [um], above the cell's "
+                   f"critical diameter, {bounds('diameter_um')} (default {d['diameter_um']:g})")
     e.add_argument("--velocity-mm-s", type=float,
-                   help=f"mean flow velocity U [mm/s] (default {d['velocity_mm_s']:g})")
+                   help=f"mean flow velocity U [mm/s], {bounds('velocity_mm_s')} "
+                        f"(default {d['velocity_mm_s']:g})")
     e.add_argument("--plasma-viscosity-mpas", type=float,
-                   help=f"suspending viscosity [mPa s] (default {d['plasma_viscosity_mpas']:g})")
+                   help=f"suspending viscosity [mPa s], {bounds('plasma_viscosity_mpas')} "
+                        f"(default {d['plasma_viscosity_mpas']:g})")
     e.add_argument("--bending-modulus-j", type=float,
-                   help=f"bending modulus kappa [J] (default {d['bending_modulus_j']:g})")
+                   help=f"bending modulus kappa [J], {bounds('bending_modulus_j')} "
+                        f"(default {d['bending_modulus_j']:g})")
     e.add_argument("--nu", type=float, help="reduced volume [-] (dimensionless estimate, with --lam)")
     e.add_argument("--lam", type=float, help="confinement R0/R [-] (dimensionless estimate)")
-    e.add_argument("--ca-b", type=float, help="bending capillary number eta U R0^2/kappa [-] (with --nu/--lam)")
+    e.add_argument("--ca-b", type=float, help="bending capillary number eta U R0^2/kappa > 0 [-] "
+                   "(with --nu/--lam; when omitted the closed forms assume Chen et al. 2020's "
+                   "10 <= Ca_B <= 1e4 and the solvers use 50)")
     e.add_argument("--hematocrit", type=float, help="hematocrit, a fraction in [0, 1) [-]")
     e.add_argument("--hematocrit-kind", choices=("tube", "discharge"), default="tube",
                    help="whether --hematocrit is the tube (H_T) or discharge (H_D) value (default tube)")

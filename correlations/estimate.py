@@ -25,16 +25,19 @@ import math
 import warnings
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from lubrication.checks import (CannotPassError, InvalidParameterError, OutOfRangeWarning,
-                                check_choice, check_fraction, check_positive)
+                                check_choice, check_fraction, check_positive, check_range)
 from lubrication.geometry import (cell_from_volume_area, check_passes, check_reduced_volume,
                                   critical_diameter_um,
                                   critical_length, critical_length_um)
 
-from .registry import METHODS, QUANTITIES, SOLVER_COST, SOLVERS, SolverNotConverged
+from .registry import (BEM_DEFAULT_CA_B, LUBRICATION_DEFAULT_CA_B, METHODS, QUANTITIES,
+                       SOLVER_COST, SOLVERS, SolverNotConverged, check_output)
 
-__all__ = ["RBC_DEFAULTS", "RUPTURE_TENSION_MN_M", "Quantity", "Estimate", "estimate",
-           "estimate_dimensionless"]
+__all__ = ["RBC_DEFAULTS", "PHYSICAL_BOUNDS", "RUPTURE_TENSION_MN_M", "UNITS", "Quantity",
+           "Estimate", "estimate", "estimate_dimensionless"]
 
 RBC_DEFAULTS = {
     "volume_fl": 90.0,            # Evans & Fung 1972 (mean corpuscular volume ~90 fL)
@@ -43,6 +46,22 @@ RBC_DEFAULTS = {
     "velocity_mm_s": 1.0,         # mean flow velocity U; capillary RBC speeds ~1 mm/s
     "plasma_viscosity_mpas": 1.2,  # plasma at 37 degC
     "bending_modulus_j": 2e-19,   # Chen et al. 2020, Evans 1983
+}
+
+#: Accepted range of each physical input, ``name: (lo, hi, reason)`` (closed bounds). They are
+#: wide (many decades around every physical case) and exist so that absurd values are refused
+#: with a message instead of overflowing: inside them every derived number of the estimate
+#: (Ca_B between ~1e-35 and ~1e32, pressures, tensions, lengths) is a finite double.
+PHYSICAL_BOUNDS = {
+    "volume_fl": (1e-6, 1e12, "from R0 = 6 nm (the smallest closed bilayer vesicles have "
+                              "R0 ~ 10 nm) to R0 = 6 mm (giant vesicles are < 0.1 mm)"),
+    "diameter_um": (1e-3, 1e7, "from 1 nm to 10 m"),
+    "velocity_mm_s": (1e-9, 1e6, "from 1 pm/s to 1 km/s (Stokes flow needs far less than the "
+                                 "upper bound: capillary red cells move at ~1 mm/s)"),
+    "plasma_viscosity_mpas": (1e-3, 1e12, "from gases (~0.02 mPa s) to bitumen-like liquids; "
+                                          "plasma is 1.2 mPa s"),
+    "bending_modulus_j": (1e-24, 1e-12, "from 1e-3 kT to 1e8 kT; lipid bilayers and red cells "
+                                        "have 1e-20 to 1e-18 J"),
 }
 
 #: Lysis tension range of lipid bilayers and RBC membranes [mN/m] (Rawicz et al. 2000; Evans et al. 2003).
@@ -54,11 +73,20 @@ _SMALL_LAM, _NEAR_CRITICAL_DELTA = 0.5, 0.1
 _HEMATOCRIT_KEYS = ("tube_hematocrit", "discharge_hematocrit", "eta_rel")
 NO_HEMATOCRIT = "not computed: give a hematocrit (--hematocrit)"
 
-_UNITS = {
-    "V_over_U": "-", "film": "h/R", "ell": "L/R", "dp_plus_R0": "dp+ R0/(eta U)",
-    "shape_class": "", "tension_front": "eta V", "tube_hematocrit": "-",
-    "discharge_hematocrit": "-", "eta_rel": "-",
+#: Unit or scale of every quantity of the estimate (the table's "unit / scaling" column and the
+#: JSON ``methods[key].unit``). Convention: a physical unit ("um", "mm/s", "Pa", "nm", "mN/m"),
+#: or the scale a dimensionless number is measured in ("R": the value is h/R; "eta U/R0": the
+#: value is dp+ R0/(eta U)); "-" for a plain dimensionless number (nu, V/U, a hematocrit);
+#: "" for a non-number (a shape class, yes/no).
+UNITS = {
+    "nu": "-", "lam": "-", "lam_c": "-", "delta": "-", "ell_c": "R_c", "passes": "",
+    "ca_b": "-", "V_over_U": "-", "film": "R", "ell": "R", "dp_plus_R0": "eta U/R0",
+    "dp_plus_R": "eta U/R", "shape_class": "", "tension_front": "eta V",
+    "tension_front_etaU": "eta U", "tube_hematocrit": "-", "discharge_hematocrit": "-",
+    "eta_rel": "-", "R0_um": "um", "d_c_um": "um", "L_c_um": "um", "V_mm_s": "mm/s",
+    "dp_plus_Pa": "Pa", "film_nm": "nm", "length_um": "um", "tension_front_mN_m": "mN/m",
 }
+_UNITS = UNITS
 
 
 @dataclass(frozen=True)
@@ -91,8 +119,14 @@ class Estimate:
         return self.quantities[key].value
 
     def to_dict(self) -> dict:
-        """Flat JSON-ready dict: each key its value, plus ``methods`` (provenance per key)."""
+        """Flat JSON-ready dict: each key its value, plus ``methods`` (provenance per key).
+
+        When an enabled solver failed, ``converged`` is False and ``message`` says why (the
+        numbers shown then come from the other methods of the table, never from the failed
+        solve)."""
         out = {"command": "estimate", "converged": self.converged, "regime": self.regime}
+        if not self.converged:
+            out["message"] = "; ".join(n for n in self.notes if "did not converge" in n)
         out.update({k: q.value for k, q in self.quantities.items()})
         out["methods"] = {k: {"method": q.method, "valid": q.valid, "source": q.source,
                               "unit": q.unit, **({"note": q.note} if q.note else {})}
@@ -128,14 +162,11 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
             continue
         bad = m.validity.violations(**known)
         if not bad:
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", OutOfRangeWarning)
-                    return Quantity(m.evaluate(known), _UNITS[quantity], m.name, True, m.source)
-            except SolverNotConverged as exc:
-                log.setdefault("failures", {})[m.solver] = str(exc)
-                reasons.append(f"{m.name}: {exc}")
-                continue
+            value, failure = _evaluate(m, quantity, known, log)
+            if not failure:
+                return Quantity(value, _UNITS[quantity], m.name, True, m.source)
+            reasons.append(f"{m.name}: {failure}")
+            continue
         reasons.append(f"{m.name}: {'; '.join(bad)}")
         dist = m.validity.distance(**known)
         if extrapolate and (fallback is None or dist < fallback[0]):
@@ -144,14 +175,34 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
     if fallback is None:
         return Quantity(None, _UNITS[quantity], None, False, "", note)
     m = fallback[1]
+    value, failure = _evaluate(m, quantity, {**extrapolated, **known}, log)
+    if failure:
+        return Quantity(None, _UNITS[quantity], None, False, "", f"{note}; {m.name}: {failure}")
+    return Quantity(value, _UNITS[quantity], m.name, False, m.source, "EXTRAPOLATED; " + note)
+
+
+def _evaluate(m, quantity: str, state: dict, log: dict):
+    """``(value, "")`` from method ``m``, or ``(None, reason)`` when it fails or its value breaks
+    the bounds of :func:`correlations.registry.check_output` (never a number from a failure)."""
+    if m.solver is not None:
+        log.setdefault("ran", set()).add(m.solver)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", OutOfRangeWarning)
-            value = m.evaluate({**extrapolated, **known})
+            value = m.evaluate(state)
     except SolverNotConverged as exc:
         log.setdefault("failures", {})[m.solver] = str(exc)
-        return Quantity(None, _UNITS[quantity], None, False, "", f"{note}; {m.name}: {exc}")
-    return Quantity(value, _UNITS[quantity], m.name, False, m.source, "EXTRAPOLATED; " + note)
+        return None, str(exc)
+    except InvalidParameterError as exc:       # e.g. a fit evaluated where it is unphysical
+        return None, f"not applicable: {exc}"
+    if not isinstance(value, str):
+        value = float(value)
+    problem = check_output(quantity, value, state)
+    if problem:
+        if m.solver is not None:
+            log.setdefault("failures", {})[m.solver] = f"rejected output: {problem}"
+        return None, f"rejected output: {problem}"
+    return value, ""
 
 
 def _scaled(q: Quantity, factor: float, unit: str, times: Quantity | None = None) -> Quantity:
@@ -161,6 +212,8 @@ def _scaled(q: Quantity, factor: float, unit: str, times: Quantity | None = None
     if missing:
         return Quantity(None, unit, None, False, "", missing[0].note)
     value = q.value * factor * (1.0 if times is None else times.value)
+    if not math.isfinite(value):    # cannot happen inside PHYSICAL_BOUNDS; never report it
+        return Quantity(None, unit, None, False, "", f"not representable ({value!r})")
     valid = all(p.valid for p in parts)
     note = next((p.note for p in parts if p.note), "")
     return Quantity(value, unit, q.method, valid, q.source, note)
@@ -178,6 +231,14 @@ def _provenance() -> dict:
     import numpy
     from lubrication import __version__
     return {"package": "vesicle-tube", "version": __version__, "numpy": numpy.__version__}
+
+
+def _scalar(name: str, x):
+    """``x`` itself if it is a single number (or None); the estimate is computed for one case."""
+    if x is not None and not isinstance(x, str) and np.ndim(x) != 0:
+        raise InvalidParameterError(name, x, f"a single number (got an array of shape "
+                                             f"{np.shape(x)})", "the estimate is for one case")
+    return x
 
 
 def _hematocrits(tube_hematocrit, discharge_hematocrit) -> dict:
@@ -218,11 +279,16 @@ def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapola
         q = quantities[name] = _select(name, known, extrapolated, extrapolate, solvers, log)
         if q.value is not None:
             (known if q.valid else extrapolated)[name] = q.value
-    geometric = {k: Quantity(state[k], "-", "geometry (Chen 2020 §III)", True)
+    geometric = {k: Quantity(state[k], _UNITS[k], "geometry (Chen 2020 §III)", True)
                  for k in ("lam_c", "ell_c", "delta")}
-    derived = {"dp_plus_R": _scaled(quantities["dp_plus_R0"], 1.0 / lam, "dp+ R/(eta U)"),
-               "tension_front_etaU": _scaled(quantities["tension_front"], 1.0, "eta U",
-                                             quantities["V_over_U"])}
+    dp = quantities["dp_plus_R0"]
+    # dp+ R/(eta U) = (dp+ R0/(eta U)) / lam: a division, since 1/lam overflows for tiny lam.
+    dp_R = (Quantity(dp.value / lam, _UNITS["dp_plus_R"], dp.method, dp.valid, dp.source, dp.note)
+            if dp.value is not None else Quantity(None, _UNITS["dp_plus_R"], None, False, "",
+                                                  dp.note))
+    derived = {"dp_plus_R": dp_R,
+               "tension_front_etaU": _scaled(quantities["tension_front"], 1.0,
+                                             _UNITS["tension_front_etaU"], quantities["V_over_U"])}
     return state, {"nu": Quantity(nu, "-", "input", True), "lam": Quantity(lam, "-", "input", True),
                    "passes": Quantity(True, "", "lam < lam_c", True),
                    **geometric, **quantities, **derived}
@@ -266,16 +332,42 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
     >>> e.regime.split(" (")[0], round(e["V_over_U"], 3), e.quantities["V_over_U"].method
     ('near-critical', 1.06, 'near_critical_barakat2018a')
     """
+    for name, x in (("nu", nu), ("lam", lam), ("ca_b", ca_b), ("tube_hematocrit", tube_hematocrit),
+                    ("discharge_hematocrit", discharge_hematocrit)):
+        _scalar(name, x)
     hematocrits = _hematocrits(tube_hematocrit, discharge_hematocrit)
     nu, lam = float(check_reduced_volume(nu)), float(check_positive("lam", lam))
     if ca_b is not None:
         ca_b = float(check_positive("ca_b", ca_b))
     solvers, log = _check_solvers(solvers), {}
     state, quantities = _core(nu, lam, ca_b, hematocrits, None, extrapolate, solvers, log)
+    quantities["ca_b"] = _ca_b_quantity(ca_b, solvers, log)
     inputs = {"nu": nu, "lam": lam, "ca_b": ca_b, **hematocrits}
     return Estimate(inputs=inputs, quantities=quantities, regime=_regime(lam, state["delta"]),
                     notes=_notes(quantities, ca_b, log), provenance=_provenance(),
                     converged=not log.get("failures"))
+
+
+def _ca_b_quantity(ca_b, solvers: tuple, log: dict) -> Quantity:
+    """The Ca_B the estimate used, stated: the input, or what stands in when none is given.
+
+    The closed forms of the table do not take Ca_B: they are correlations at Chen et al.'s
+    Ca_B = 50 and assume 10 <= Ca_B <= 1e4. The solver rows take the case's Ca_B, and 50 (Chen
+    et al. 2020) when none is given.
+    """
+    if ca_b is not None:
+        return Quantity(ca_b, _UNITS["ca_b"], "input", True)
+    ran = sorted(s for s in solvers if s in log.get("ran", ()))
+    if ran:
+        default = {"lubrication": LUBRICATION_DEFAULT_CA_B, "bem": BEM_DEFAULT_CA_B}
+        values = {default[s] for s in ran}
+        if len(values) == 1:
+            return Quantity(values.pop(), _UNITS["ca_b"],
+                            f"assumed by the {' and '.join(ran)} solver (not given; Chen et al. "
+                            "2020 value)", True)
+    return Quantity(None, _UNITS["ca_b"], None, False, "",
+                    "not given: the closed forms assume Chen et al. 2020's regime 10 <= Ca_B <= "
+                    "1e4 (their results are at Ca_B = 50); give --ca-b to state it")
 
 
 def _check_solvers(solvers) -> tuple:
@@ -362,11 +454,18 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     True
     """
     kind = check_choice("hematocrit_kind", hematocrit_kind, ("tube", "discharge"))
+    given = {"volume_fl": volume_fl, "diameter_um": diameter_um, "velocity_mm_s": velocity_mm_s,
+             "plasma_viscosity_mpas": plasma_viscosity_mpas, "bending_modulus_j": bending_modulus_j}
+    for name, x in (*given.items(), ("area_um2", area_um2), ("hematocrit", hematocrit)):
+        _scalar(name, x)
+    for name, value in given.items():      # absurd values are refused before any work
+        lo, hi, reason = PHYSICAL_BOUNDS[name]
+        check_range(name, check_positive(name, value), lo, hi, reason=reason)
     nu, R0 = cell_from_volume_area(volume_fl, area_um2)
-    diameter_um = float(check_positive("diameter_um", diameter_um))
-    U = float(check_positive("velocity_mm_s", velocity_mm_s)) * 1e-3           # [m/s]
-    eta = float(check_positive("plasma_viscosity_mpas", plasma_viscosity_mpas)) * 1e-3  # [Pa s]
-    kappa = float(check_positive("bending_modulus_j", bending_modulus_j))    # [J]
+    diameter_um = float(diameter_um)
+    U = float(velocity_mm_s) * 1e-3                       # [m/s]
+    eta = float(plasma_viscosity_mpas) * 1e-3             # [Pa s]
+    kappa = float(bending_modulus_j)                      # [J]
     d_c = critical_diameter_um(nu, R0)
     if diameter_um <= d_c:
         raise CannotPassError("diameter_um", diameter_um, f"diameter_um > d_c = {d_c:.4g} um",
@@ -385,7 +484,7 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     geo = "geometry (Chen 2020 §III)"
     physical = {"R0_um": Quantity(R0, "um", geo, True), "d_c_um": Quantity(d_c, "um", geo, True),
                 "L_c_um": Quantity(critical_length_um(nu, R0), "um", geo, True),
-                "ca_b": Quantity(ca_b, "-", "eta U R0^2/kappa", True)}
+                "ca_b": Quantity(ca_b, "-", "eta U R0^2/kappa (from the inputs)", True)}
     physical.update(V_mm_s=_scaled(q["V_over_U"], U * 1e3, "mm/s"),
                     dp_plus_Pa=_scaled(q["dp_plus_R0"], eta * U / R0_m, "Pa"),
                     film_nm=_scaled(q["film"], R_m * 1e9, "nm"),

@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from lubrication.checks import ValidityRange, check_positive, check_range, scalar_or_array
+from lubrication.checks import (InvalidParameterError, ValidityRange, check_positive, check_range,
+                                scalar_or_array)
 
 __all__ = [
     "DP_PLUS_FILM_RANGE_CHEN2020",
@@ -70,6 +71,11 @@ def dp_plus_film_chen2020(lam, ell, delta):
     dp_plus_R0 : float or ndarray
         :math:`\Delta p^+R_0/(\eta U)` [-].
 
+    Raises
+    ------
+    InvalidParameterError
+        For invalid inputs, or (naming ``delta``) when the result would overflow.
+
     Examples
     --------
     >>> round(dp_plus_film_chen2020(1.94, 10.81, 0.0208), 0)
@@ -80,7 +86,18 @@ def dp_plus_film_chen2020(lam, ell, delta):
     delta = check_range("delta", delta, 0.0, 1.0, lo_open=True, hi_open=True,
                         reason="the film is thinner than the tube radius")
     DP_PLUS_FILM_RANGE_CHEN2020.warn_outside("dp_plus_film_chen2020", delta=delta)
-    return scalar_or_array(1.5 * lam * ell / delta)
+    with np.errstate(over="ignore"):
+        lam_ell = 1.5 * lam * ell
+        dp = lam_ell / delta
+    bad = ~np.isfinite(dp)
+    if bad.any():     # an absurd length or confinement, or a film thinner than any physical one
+        lam_ell_b, delta_b = np.broadcast_arrays(lam_ell, delta)
+        raise InvalidParameterError(
+            "delta", delta_b[bad] if delta_b.ndim else delta_b,
+            f"delta > 1.5 lam ell/{np.finfo(float).max:.4g} = "
+            f"{float(np.ravel(lam_ell_b[bad])[0]) / np.finfo(float).max:.4g}",
+            "the extra pressure drop 1.5 lam ell/delta would overflow")
+    return scalar_or_array(dp)
 
 
 def dp_plus_speed_fit_chen2020(V_over_U):

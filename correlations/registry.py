@@ -6,7 +6,8 @@ estimate takes the first one whose validity range contains the case (and whose i
 themselves valid). Where no method is valid the quantity is reported as unavailable, with the
 reason; it is extrapolated (and flagged ``valid=False``) only when the caller asks for it.
 
-Numerical solvers (the lubrication BVP, issue 4; the BEM vesicle, issue 6) extend the table with
+Numerical solvers (the lubrication BVP, :mod:`lubrication.solve`; the BEM vesicle,
+:mod:`bem.vesicle`) extend the table with
 opt-in :class:`Method` rows for the range where they are valid (below).
 
 State passed to the methods (dimensionless unless named): ``nu``, ``lam``, ``lam_c``, ``delta``
@@ -53,16 +54,19 @@ there the estimate only says that the BEM covers the case (a solve takes minutes
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
+
+from numpy.linalg import LinAlgError
 
 from lubrication import asymptotics
 from lubrication.checks import ValidityRange
 
 from . import film, pressure, shape, viscosity
 
-__all__ = ["BEM_RANGE", "Method", "METHODS", "QUANTITIES", "SOLVERS", "SOLVER_COST",
-           "SolverNotConverged"]
+__all__ = ["BEM_RANGE", "Method", "METHODS", "OUTPUT_BOUNDS", "QUANTITIES", "SOLVERS",
+           "SOLVER_COST", "SolverNotConverged", "check_output"]
 
 #: Opt-in numerical solvers that rows of the table may name.
 SOLVERS = ("lubrication", "bem")
@@ -130,7 +134,7 @@ def _eta_single_file(s: dict) -> float:
     # Lengths in units of the tube radius: d = 2, R0 = lam.
     return viscosity.viscosity_single_file_chen2020(s["dp_plus_R0"], 2.0, s["lam"], s["tube_hematocrit"])
 
-# Lubrication solver (issue 4). Chen et al. 2020 (fig. vel, dpa) find the Secomb et al. (1986)
+# Lubrication solver (lubrication.solve). Chen et al. 2020 (fig. vel, dpa) find the Secomb et al. (1986)
 # lubrication model in very good agreement with their BEM for lam > 1.4 at nu ~ 0.6, i.e.
 # lam/lam_c >~ 0.7 (delta <= 0.3); nu from 0.6 to 0.98 is the range the solver is tested on.
 LUBRICATION_RANGE = ValidityRange.of(
@@ -140,18 +144,39 @@ LUBRICATION_RANGE = ValidityRange.of(
 LUBRICATION_DEFAULT_CA_B = 50.0
 
 
+@dataclass(frozen=True)
+class _Failed:
+    """A solver call that raised instead of returning a result (cached like a result)."""
+
+    success = False
+    message: str
+
+
+def _guarded(solve, *args, **kwargs):
+    """``solve(*args, **kwargs)``, or a :class:`_Failed` carrying the reason when it raises.
+
+    A solver that raises (bad state, a linear-algebra or floating-point failure) produces no
+    numbers: the rows of the table fall back to the next method, as for a non-converged
+    result. KeyboardInterrupt is not caught (the command exits 130 naming no number).
+    """
+    try:
+        return solve(*args, **kwargs)
+    except (ArithmeticError, ValueError, RuntimeError, LinAlgError) as exc:
+        return _Failed(f"{type(exc).__name__}: {exc}")
+
+
 @functools.lru_cache(maxsize=16)
 def _lubrication_solution(nu: float, lam: float, ca_b: float):
     from lubrication.solve import solve_lubrication
-    return solve_lubrication(nu, lam, ca_b=ca_b)
+    return _guarded(solve_lubrication, nu, lam, ca_b=ca_b)
 
 
-# BEM vesicle (issue 6): the full Stokes problem, no lubrication approximation. Validated for
+# BEM vesicle (bem.vesicle): the full Stokes problem, no lubrication approximation. Validated for
 # nu = 0.9 up to lam/lam_c = 0.98, nu = 0.98, and long vesicles (nu = 0.6-0.8, "bend" density):
 # (0.61, 1.39) the RBC in 4 um, (0.7, 1.5), (0.6, 1.78-1.84), (0.8, 0.97 lam_c) converge to
 # ~1 %; at nu = 0.6 near lam_c (delta = 0.02) gamma_max is not converged and the solve reports
 # it (docs/validation.md).
-BEM_RANGE = ValidityRange.of("validated range of bem.vesicle.solve_vesicle (issue 6)",
+BEM_RANGE = ValidityRange.of("validated range of bem.vesicle.solve_vesicle (docs/validation.md)",
                              nu=(0.6, 0.98), delta=(0.02, 1.0))
 #: tolerances of the estimate's BEM solve (engineering accuracy, ~1 %): refinement pair and
 #: steady residual max|u - V e_x| [U]
@@ -165,7 +190,7 @@ def _bem_result(nu: float, lam: float, ca_b: float):
     """One :func:`bem.vesicle.solve_vesicle` per (nu, lam, Ca_B) to BEM_TOLERANCES, converged
     or not (minutes)."""
     from bem import vesicle  # lazy: numba loads only when the BEM is enabled
-    return vesicle.solve_vesicle(nu, lam, ca_b=ca_b, **BEM_TOLERANCES)
+    return _guarded(vesicle.solve_vesicle, nu, lam, ca_b=ca_b, **BEM_TOLERANCES)
 
 
 def _solver_rows(solver: str, name: str, reference: str, rng: ValidityRange, solve,
@@ -173,28 +198,42 @@ def _solver_rows(solver: str, name: str, reference: str, rng: ValidityRange, sol
     """Rows of one numerical solver for V/U, film (minimum gap), ell, dp+, shape class and
     front tension; ``solve(nu, lam, ca_b)`` is cached, so one solve serves all rows (failures
     included, so a solve that did not converge is not repeated for every row)."""
-    def row(key: str):
+    pairs = (("V_over_U", "V_over_U"), ("film", "film_min"), ("ell", "ell"),
+             ("dp_plus_R0", "dp_plus_R0"), ("shape_class", "shape_class"),
+             ("tension_front", "tension_front"))
+
+    def values(res) -> dict:
+        """Every table quantity of a solve, or SolverNotConverged: a solve that failed, or
+        returned one non-finite or unphysical number, gives no number at all."""
+        if not res.success:
+            raise SolverNotConverged(f"{solver} solver did not converge: {res.message}")
+        out = {}
+        for q, key in pairs:
+            value = getattr(res, key, None)
+            if q == "tension_front" and value is not None:   # table unit: eta V (result: eta U)
+                value = value / res.V_over_U
+            problem = check_output(q, value, {})
+            if problem:
+                raise SolverNotConverged(f"{solver} solver reported success but its result is "
+                                         f"rejected: {problem}")
+            out[q] = value
+        return out
+
+    def row(quantity: str):
         def evaluate(s: dict):
-            res = solve(s["nu"], s["lam"], s.get("ca_b", default_ca_b))
-            if not res.success:
-                raise SolverNotConverged(f"{solver} solver did not converge: {res.message}")
-            if key == "tension_front":                 # table unit: eta V (result: eta U)
-                return res.tension_front / res.V_over_U
-            return getattr(res, key)
+            return values(solve(s["nu"], s["lam"], s.get("ca_b", default_ca_b)))[quantity]
         return evaluate
     return tuple(
-        Method(q, name, reference + (" (minimum gap)" if q == "film" else ""), rng, row(key),
+        Method(q, name, reference + (" (minimum gap)" if q == "film" else ""), rng, row(q),
                solver=solver)
-        for q, key in (("V_over_U", "V_over_U"), ("film", "film_min"), ("ell", "ell"),
-                       ("dp_plus_R0", "dp_plus_R0"), ("shape_class", "shape_class"),
-                       ("tension_front", "tension_front")))
+        for q, _ in pairs)
 
 
 _LUBRICATION_ROWS = _solver_rows(
     "lubrication", "lubrication_solver", "Secomb et al. 1986 / Barakat & Shaqfeh 2018b "
     "lubrication model, lubrication.solve", LUBRICATION_RANGE,
     lambda *a: _lubrication_solution(*a), LUBRICATION_DEFAULT_CA_B)   # looked up at call time
-_BEM_ROWS = _solver_rows("bem", "bem_vesicle", "bem.vesicle.solve_vesicle (issue 6)", BEM_RANGE,
+_BEM_ROWS = _solver_rows("bem", "bem_vesicle", "BEM vesicle, bem.vesicle.solve_vesicle", BEM_RANGE,
                          lambda *a: _bem_result(*a), BEM_DEFAULT_CA_B)
 
 
@@ -255,6 +294,45 @@ METHODS: tuple[Method, ...] = (
     Method("eta_rel", "pries1992_in_vitro", "Pries, Neuhaus & Gaehtgens 1992",
            viscosity.PRIES1992_RANGE, _eta_pries1992, requires=("diameter_um", "discharge_hematocrit")),
 )
+
+#: Bounds the physics sets on every output of the table, checked on every value before it is
+#: reported (a value outside comes from a method used beyond its meaning or from a failed
+#: solve: it is refused and the next method is tried). ``(lo, hi, reason)``, closed bounds.
+OUTPUT_BOUNDS = {
+    "V_over_U": (1.0, 2.0, "a cell on the axis moves between the mean (1) and the centreline (2) "
+                           "velocity of the Poiseuille flow"),
+    "film": (0.0, 1.0, "the film lies between the membrane and the wall: 0 <= h/R <= 1"),
+    "ell": (0.0, math.inf, "a length is positive"),
+    "dp_plus_R0": (0.0, math.inf, "a force-free cell in Stokes flow raises the pressure drop "
+                                  "(reciprocal theorem: dp+ >= 0)"),
+    "tension_front": (0.0, math.inf, "the front tension of a confined vesicle pulls (> 0)"),
+    "tube_hematocrit": (0.0, 1.0, "a volume fraction"),
+    "discharge_hematocrit": (0.0, 1.0, "a volume fraction"),
+    "eta_rel": (1.0, math.inf, "force-free cells add dissipation: eta_rel >= 1"),
+}
+
+
+def check_output(quantity: str, value, state: dict) -> str:
+    """Why ``value`` cannot be reported for ``quantity`` (empty string if it can).
+
+    Checks finiteness, :data:`OUTPUT_BOUNDS`, and H_T <= H_D (single file, H_T/H_D = U/V <= 1,
+    physics-notes §6) against a hematocrit of the other kind already in ``state``.
+    """
+    if isinstance(value, str):
+        return ""
+    if value is None or not math.isfinite(value):
+        return f"{quantity} = {value!r} is not a finite number"
+    lo, hi, reason = OUTPUT_BOUNDS.get(quantity, (-math.inf, math.inf, ""))
+    if not lo <= value <= hi:
+        return f"{quantity} = {value:.6g} outside {lo:g} <= {quantity} <= {hi:g} ({reason})"
+    h_t = value if quantity == "tube_hematocrit" else state.get("tube_hematocrit")
+    h_d = value if quantity == "discharge_hematocrit" else state.get("discharge_hematocrit")
+    if quantity in ("tube_hematocrit", "discharge_hematocrit") and h_t is not None \
+            and h_d is not None and h_t > h_d:
+        return (f"tube hematocrit {h_t:.6g} > discharge hematocrit {h_d:.6g}: impossible, "
+                "H_T/H_D = U/V <= 1")
+    return ""
+
 
 #: Output quantities in evaluation order (later rows may require earlier ones).
 QUANTITIES = ("V_over_U", "film", "ell", "dp_plus_R0", "shape_class", "tension_front",

@@ -37,6 +37,7 @@ __all__ = [
     "PRIES1994_RANGE",
     "PRIES2005_RANGE",
     "FAHRAEUS_RANGE",
+    "FAHRAEUS_MIN_DIAMETER_UM",
     "CHEN2020_RANGE",
     "PRIES1994_W_UM",
     "PRIES2005_ESL",
@@ -46,6 +47,7 @@ __all__ = [
     "viscosity_vivo_pries1994",
     "viscosity_vivo_pries2005",
     "relative_viscosity",
+    "hematocrit_ratio_fahraeus",
     "tube_hematocrit_fahraeus",
     "discharge_hematocrit_fahraeus",
     "viscosity_single_file_chen2020",
@@ -105,6 +107,21 @@ PRIES2005_RANGE = ValidityRange.of(
 FAHRAEUS_RANGE = ValidityRange.of(
     "Pries et al. 1990/1992 Fåhræus fit (box of the in vitro data base, 3.3-1978 µm)",
     diameter_um=(3.3, 1978.0), discharge_hematocrit=(0.0, 0.9), tube_hematocrit=(0.0, 0.9))
+
+
+def _fahraeus_unit_diameter(constants: str) -> float:
+    """Diameter D* [µm] where x = 1 + 1.7 e^(-aD) - 0.6 e^(-bD) = 1: D* = ln(1.7/0.6)/(a - b)."""
+    a, b = FAHRAEUS_CONSTANTS[constants]
+    return math.log(1.7 / 0.6) / (a - b)
+
+
+#: Smallest diameter [µm] where each Fåhræus fit is physically meaningful: below D* the fit has
+#: x > 1, i.e. H_T > H_D, impossible since H_T/H_D = U/V <= 1 (cells move at least as fast as
+#: the mean flow: single file, physics-notes §6; Pries et al. 1990, 1992 data show H_T < H_D in
+#: every tube). D* = ln(1.7/0.6)/(a - b): 2.578 µm (pries1990), 3.063 µm (pries1992). At D*
+#: exactly x = 1 and H_T = H_D; the functions refuse D <= D* (InvalidParameterError) and warn
+#: (extrapolated) between D* and 3.3 µm, the smallest tube of the data base.
+FAHRAEUS_MIN_DIAMETER_UM = {name: _fahraeus_unit_diameter(name) for name in FAHRAEUS_CONSTANTS}
 
 # Chen et al. 2020 §Visco: single-file flow holds in capillaries up to about 8 µm. The lower
 # limit d > d_c (~2.8 µm for a red cell) is a property of the cell, enforced where Δp⁺ is computed.
@@ -169,7 +186,8 @@ def _esl_widths(d, hd):
     """Pries & Secomb 2005 ESL widths (W_ph, W_eff) [µm] for diameters d > 0."""
     p = PRIES2005_ESL
     above_off = d > p["D_off"]
-    w_as = np.where(above_off, p["W_max"] * (d - p["D_off"]) / (d + p["D_50"] - 2.0 * p["D_off"]),
+    # the ratio first: W_max (D - D_off) alone overflows for D > ~7e307 µm
+    w_as = np.where(above_off, p["W_max"] * ((d - p["D_off"]) / (d + p["D_50"] - 2.0 * p["D_off"])),
                     0.0)
     w_peak = np.where(
         d <= p["D_crit"],
@@ -186,9 +204,23 @@ def _fahraeus_x(d, constants):
     return 1.0 + 1.7 * np.exp(-a * d) - 0.6 * np.exp(-b * d)
 
 
+def _fahraeus_ratio(d, hd, constants):
+    """H_T/H_D = H_D + (1 - H_D) x, capped at 1 (x <= 1 for D > D*; the cap removes rounding)."""
+    return np.minimum(hd + (1.0 - hd) * _fahraeus_x(d, constants), 1.0)
+
+
 def _check_diameter(diameter_um):
     return check_positive("diameter_um", diameter_um,
                           reason="give the tube diameter in µm as a positive finite number")
+
+
+def _check_fahraeus_diameter(diameter_um, constants):
+    """D > D*(constants): the Fåhræus fit gives H_T <= H_D only there (FAHRAEUS_MIN_DIAMETER_UM)."""
+    d_min = FAHRAEUS_MIN_DIAMETER_UM[constants]
+    return check_range("diameter_um", diameter_um, d_min, lo_open=True,
+                       reason=f"below {d_min:.4g} µm the {constants} Fåhræus fit gives a tube "
+                              "hematocrit above the discharge hematocrit (H_T/H_D = U/V <= 1 is "
+                              "required); the fit's data start at 3.3 µm")
 
 
 # --------------------------------------------------------------------------------------------
@@ -476,6 +508,39 @@ def relative_viscosity(diameter_um, discharge_hematocrit, law="pries1992"):
     return _LAW_FUNCTIONS[law](diameter_um, discharge_hematocrit)
 
 
+def hematocrit_ratio_fahraeus(diameter_um, discharge_hematocrit, constants="pries1990"):
+    r"""Fåhræus ratio :math:`H_T/H_D = H_D + (1 - H_D)x` (see :func:`tube_hematocrit_fahraeus`).
+
+    Computed directly rather than as a quotient of two hematocrits, so it stays exact for tiny
+    (even subnormal) hematocrits, and is 1 - (1 - x) at H_D = 0.
+
+    Parameters
+    ----------
+    diameter_um : float or array_like
+        Tube diameter D [µm], D > D*(constants) (:data:`FAHRAEUS_MIN_DIAMETER_UM`).
+    discharge_hematocrit : float or array_like
+        Discharge hematocrit H_D, 0 <= H_D < 1 [-].
+    constants : {"pries1990", "pries1992"}
+        Which fit to use.
+
+    Returns
+    -------
+    ratio : float or ndarray
+        H_T/H_D [-], in (0, 1].
+
+    Examples
+    --------
+    >>> round(hematocrit_ratio_fahraeus(10.0, 0.45, constants="pries1992"), 4)
+    0.7296
+    """
+    check_choice("constants", constants, tuple(FAHRAEUS_CONSTANTS))
+    d = _check_fahraeus_diameter(diameter_um, constants)
+    hd = check_fraction("discharge_hematocrit", discharge_hematocrit)
+    FAHRAEUS_RANGE.warn_outside("hematocrit_ratio_fahraeus", diameter_um=d,
+                                discharge_hematocrit=hd)
+    return scalar_or_array(_fahraeus_ratio(d, hd, constants))
+
+
 def tube_hematocrit_fahraeus(diameter_um, discharge_hematocrit, constants="pries1990"):
     r"""Tube hematocrit from the discharge hematocrit (Fåhræus effect).
 
@@ -486,12 +551,15 @@ def tube_hematocrit_fahraeus(diameter_um, discharge_hematocrit, constants="pries
     with (a, b) [1/µm] from ``FAHRAEUS_CONSTANTS``: ``"pries1990"`` (0.415, 0.011), Pries et al.
     1990, Circ. Res. 67:826-834, doi:10.1161/01.RES.67.4.826; ``"pries1992"`` (0.35, 0.01),
     Pries, Neuhaus & Gaehtgens 1992, Am. J. Physiol. 263:H1770-H1778. x < 1 (H_T < H_D) for
-    D above about 3 µm; x -> 1 from below as D -> inf.
+    D above D* = ln(1.7/0.6)/(a - b) (2.578 µm, pries1990; 3.063 µm, pries1992) and x -> 1 from
+    below as D -> inf (no Fåhræus effect in wide tubes; x rounds to 1 for D >~ 3700 µm, where
+    H_T = H_D). Below D* the fit would give H_T > H_D, impossible (H_T/H_D = U/V <= 1): such
+    diameters raise (:data:`FAHRAEUS_MIN_DIAMETER_UM`).
 
     Parameters
     ----------
     diameter_um : float or array_like
-        Tube diameter D [µm], > 0; warns outside 3.3-1978 µm.
+        Tube diameter D [µm], D > D*(constants); warns outside 3.3-1978 µm.
     discharge_hematocrit : float or array_like
         Discharge hematocrit H_D, 0 <= H_D < 1 [-].
     constants : {"pries1990", "pries1992"}
@@ -500,7 +568,12 @@ def tube_hematocrit_fahraeus(diameter_um, discharge_hematocrit, constants="pries
     Returns
     -------
     tube_hematocrit : float or ndarray
-        H_T [-].
+        H_T [-], H_T <= H_D.
+
+    Raises
+    ------
+    InvalidParameterError
+        For D <= D*(constants) (the message gives the bound), or invalid inputs.
 
     Examples
     --------
@@ -510,12 +583,12 @@ def tube_hematocrit_fahraeus(diameter_um, discharge_hematocrit, constants="pries
     0.3283
     """
     check_choice("constants", constants, tuple(FAHRAEUS_CONSTANTS))
-    d = _check_diameter(diameter_um)
+    d = _check_fahraeus_diameter(diameter_um, constants)
     hd = check_fraction("discharge_hematocrit", discharge_hematocrit)
     FAHRAEUS_RANGE.warn_outside("tube_hematocrit_fahraeus", diameter_um=d,
                                 discharge_hematocrit=hd)
-    x = _fahraeus_x(d, constants)
-    return scalar_or_array(hd * (hd + (1.0 - hd) * x))
+    # x <= 1 for D > D*, so H_T/H_D = H_D + (1 - H_D) x <= 1: H_T <= H_D to the last bit.
+    return scalar_or_array(hd * _fahraeus_ratio(d, hd, constants))
 
 
 def discharge_hematocrit_fahraeus(diameter_um, tube_hematocrit, constants="pries1990"):
@@ -533,12 +606,16 @@ def discharge_hematocrit_fahraeus(diameter_um, tube_hematocrit, constants="pries
     x > 0.99. The form used here has neither problem: x >= 0.4 and the discriminant
     :math:`x^2 + 4(1 - x)H_T \ge (x - 2)^2 \ge 0` for 0 <= H_T <= 1, so the denominator is
     >= 0.4, the expression is smooth through x = 1 (where it gives H_D = H_T exactly), and
-    every operation is well conditioned.
+    every operation is well conditioned. The singular point x = 1 of the usual form is met at
+    D = D* (the lower bound of the domain, excluded: below it the fit is unphysical, see
+    :func:`tube_hematocrit_fahraeus`) and, in floating point, for D >~ 3700 µm, where this form
+    returns H_D = H_T exactly.
 
     Parameters
     ----------
     diameter_um : float or array_like
-        Tube diameter D [µm], > 0; warns outside 3.3-1978 µm.
+        Tube diameter D [µm], D > D*(constants) (:data:`FAHRAEUS_MIN_DIAMETER_UM`); warns
+        outside 3.3-1978 µm.
     tube_hematocrit : float or array_like
         Tube hematocrit H_T, 0 <= H_T < 1 [-].
     constants : {"pries1990", "pries1992"}
@@ -547,7 +624,12 @@ def discharge_hematocrit_fahraeus(diameter_um, tube_hematocrit, constants="pries
     Returns
     -------
     discharge_hematocrit : float or ndarray
-        H_D [-].
+        H_D [-], H_T <= H_D < 1.
+
+    Raises
+    ------
+    InvalidParameterError
+        For D <= D*(constants) (the message gives the bound), or invalid inputs.
 
     Examples
     --------
@@ -555,12 +637,15 @@ def discharge_hematocrit_fahraeus(diameter_um, tube_hematocrit, constants="pries
     0.45
     """
     check_choice("constants", constants, tuple(FAHRAEUS_CONSTANTS))
-    d = _check_diameter(diameter_um)
+    d = _check_fahraeus_diameter(diameter_um, constants)
     ht = check_fraction("tube_hematocrit", tube_hematocrit)
     FAHRAEUS_RANGE.warn_outside("discharge_hematocrit_fahraeus", diameter_um=d,
                                 tube_hematocrit=ht)
     x = _fahraeus_x(d, constants)
-    return scalar_or_array(2.0 * ht / (x + np.sqrt(x * x + 4.0 * (1.0 - x) * ht)))
+    # x <= 1 here, so the discriminant x^2 + 4(1 - x)H_T >= x^2 and H_D >= H_T; at x = 1 (D -> inf
+    # in floating point) this is exactly H_T. np.maximum guards H_D >= H_T against rounding.
+    hd = 2.0 * ht / (x + np.sqrt(x * x + 4.0 * (1.0 - x) * ht))
+    return scalar_or_array(np.maximum(hd, ht))
 
 
 def viscosity_single_file_chen2020(dp_plus_R0, diameter_um, R0_um, tube_hematocrit):
@@ -595,7 +680,12 @@ def viscosity_single_file_chen2020(dp_plus_R0, diameter_um, R0_um, tube_hematocr
     Returns
     -------
     eta_rel : float or ndarray
-        Relative apparent viscosity [-].
+        Relative apparent viscosity [-], >= 1.
+
+    Raises
+    ------
+    InvalidParameterError
+        For invalid inputs, or when the result would overflow (an absurd dp+ or d/R0).
 
     Examples
     --------
@@ -611,4 +701,15 @@ def viscosity_single_file_chen2020(dp_plus_R0, diameter_um, R0_um, tube_hematocr
     r0 = check_positive("R0_um", R0_um)
     ht = check_fraction("tube_hematocrit", tube_hematocrit)
     CHEN2020_RANGE.warn_outside("viscosity_single_file_chen2020", diameter_um=d)
-    return scalar_or_array(1.0 + 3.0 / 32.0 * (0.5 * d / r0) ** 4 * dp * ht)
+    # In logarithms: (R/R0)^4 alone overflows for a small cell (lam = R0/R < 1e-77) although
+    # dp+ ~ 16 lam^6 makes the product small; a zero factor gives exactly 0.
+    with np.errstate(divide="ignore", over="ignore"):
+        log_term = (math.log(3.0 / 32.0) + np.log(dp) + np.log(ht)
+                    + 4.0 * (np.log(0.5 * d) - np.log(r0)))
+        eta = 1.0 + np.exp(log_term)
+    if not np.all(np.isfinite(eta)):
+        raise InvalidParameterError(
+            "dp_plus_R0", dp[~np.isfinite(np.broadcast_to(eta, np.shape(dp)))] if np.ndim(dp)
+            else dp, "(3/32)(R/R0)^4 dp_plus_R0 H_T representable",
+            "the relative viscosity overflows")
+    return scalar_or_array(eta)

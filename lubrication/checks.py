@@ -222,6 +222,11 @@ class Deadline:
         """True once the budget is spent."""
         return self._end is not None and time.monotonic() > self._end
 
+    def remaining(self) -> float | None:
+        """Seconds left (at least a millisecond, so that it is a valid ``max_time``); None
+        without a limit."""
+        return None if self._end is None else max(1e-3, self._end - time.monotonic())
+
     def message(self) -> str:
         """The reason an expired solve gives."""
         return f"stopped at the time limit max_time={self.max_time:g} s before converging"

@@ -160,7 +160,7 @@ def format_value(value) -> str:
 
 def format_rows(rows, title: str = "") -> str:
     """Fixed-width table of (quantity, value, scaling or unit, method, flag) rows."""
-    head = ("quantity", "value", "unit", "method", "")
+    head = ("quantity", "value", "unit / scaling", "method", "")
     cells = [head] + [tuple(format_value(c) if i == 1 else ("" if c is None else str(c))
                             for i, c in enumerate(r)) for r in rows]
     widths = [max(len(r[i]) for r in cells) for i in range(4)]

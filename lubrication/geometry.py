@@ -93,7 +93,10 @@ def critical_reduced_volume(lam):
 
     Chen et al. 2020 eq. critic2. A vesicle with :math:`\nu < \nu_c(\lambda)` passes a tube of
     confinement ``lam``; for :math:`\lambda \le 1` every vesicle passes, so the domain is
-    :math:`\lambda \ge 1`.
+    :math:`\lambda \ge 1`. Evaluated as
+    :math:`[(3/2\lambda)/(1 + 1/(2\lambda^3))]^{3/2}`, which does not overflow: for large
+    :math:`\lambda` it follows its asymptote :math:`(3/2)^{3/2}\lambda^{-3/2}` (and underflows to
+    0 beyond :math:`\lambda \approx 10^{205}`, where :math:`\nu_c < 10^{-307}`).
 
     Parameters
     ----------
@@ -109,9 +112,16 @@ def critical_reduced_volume(lam):
     --------
     >>> round(critical_reduced_volume(critical_confinement(0.6)), 12)
     0.6
+    >>> float(f"{critical_reduced_volume(1e200):.6g}")       # (3/2)^(3/2) lam^(-3/2)
+    1.83712e-300
     """
     lam = check_range("lam", lam, 1.0, reason="every vesicle (nu <= 1) passes a tube with lam < 1")
-    return scalar_or_array((3.0 * lam**2 / (1.0 + 2.0 * lam**3)) ** 1.5)
+    # 3 lam^2/(1 + 2 lam^3) = (3/(2 lam)) / (1 + 1/(2 lam^3)): the printed form overflows to
+    # inf/inf = NaN for lam > ~1e102; this one is exact in floating point for every lam >= 1,
+    # 1/(2 lam^3) <= 1/2 and (its lam^3 may overflow to inf, giving the limit 0 exactly).
+    with np.errstate(over="ignore"):
+        ratio = (1.5 / lam) / (1.0 + 0.5 / lam**3)
+    return scalar_or_array(ratio**1.5)
 
 
 def critical_length(nu):
@@ -206,7 +216,8 @@ def volume_radius(volume):
     2.78
     """
     volume = check_positive("volume", volume)
-    return scalar_or_array(np.cbrt(3.0 * volume / (4.0 * math.pi)))
+    # cbrt(volume) first: 3 volume/(4 pi) would overflow for volume > 4e308/3.
+    return scalar_or_array(np.cbrt(volume) * (3.0 / (4.0 * math.pi)) ** (1.0 / 3.0))
 
 
 def area_radius(area):
@@ -247,18 +258,36 @@ def reduced_volume(volume, area):
     return _reduced_volume(volume, area, "volume", "area")
 
 
-def _reduced_volume(volume, area, volume_name, area_name):
+def _reduced_volume(volume, area, volume_name, area_name, nu_min=0.0):
+    """nu = 6 sqrt(pi) (Omega^(1/3)/A^(1/2))^3, checked to lie in [nu_min, 1].
+
+    Written with the cube root of the volume and the square root of the area so that no
+    intermediate overflows or underflows for any pair of positive finite doubles whose nu is
+    representable; an area outside [sphere area, area at nu_min] raises naming ``area_name``.
+    """
     volume = check_positive(volume_name, volume)
     area = check_positive(area_name, area)
-    nu = 6.0 * math.sqrt(math.pi) * volume * area ** -1.5
+    with np.errstate(over="ignore", under="ignore"):
+        nu = 6.0 * math.sqrt(math.pi) * (np.cbrt(volume) / np.sqrt(area)) ** 3
     # Round-off tolerance: a sphere computed from its own volume may land at 1 + 1e-15.
-    if np.any(nu > 1.0 + 1e-12):
-        sphere = np.broadcast_to((36.0 * math.pi * volume**2) ** (1.0 / 3.0), np.shape(nu))
-        bad = np.flatnonzero(np.ravel(nu > 1.0 + 1e-12))[0]
+    too_small, too_large = nu > 1.0 + 1e-12, nu < nu_min
+    if np.any(too_small | too_large):
+        shape = np.shape(nu)
+        bad = np.flatnonzero(np.ravel(too_small | too_large))[0]
+        v = float(np.ravel(np.broadcast_to(volume, shape))[bad])
+        a = float(np.ravel(np.broadcast_to(area, shape))[bad])
+        # area of the sphere of volume v, (36 pi v^2)^(1/3), and of nu = nu_min; no overflow
+        sphere = (36.0 * math.pi) ** (1.0 / 3.0) * np.cbrt(v) ** 2
+        if nu_min > 0:
+            largest = sphere * (1.0 / nu_min) ** (2.0 / 3.0)
+            valid = (f"{sphere:.6g} <= {area_name} <= {largest:.6g} for {volume_name}={v:.6g} "
+                     f"(from the sphere of that volume to reduced volume nu = {nu_min:g})")
+        else:
+            valid = f"{area_name} >= {sphere:.6g} (the sphere of the same volume)"
         raise InvalidParameterError(
-            area_name, np.ravel(np.broadcast_to(area, np.shape(nu)))[bad],
-            f"{area_name} >= {sphere.ravel()[bad]:.6g} (the sphere of the same volume)",
-            "a closed membrane cannot enclose more than a sphere of equal area")
+            area_name, a, valid,
+            "a closed membrane cannot enclose more than a sphere of equal area"
+            if too_small.ravel()[bad] else f"the reduced volume would be below {nu_min:g}")
     return scalar_or_array(np.minimum(nu, 1.0))
 
 
@@ -284,13 +313,19 @@ def cell_from_volume_area(volume_fl, area_um2):
     R0_um : float or ndarray
         Volume radius [µm] (1 fL = 1 µm³).
 
+    Raises
+    ------
+    InvalidParameterError
+        Naming ``area_um2`` when the area is below the sphere of that volume (nu > 1) or above
+        the area of reduced volume ``NU_MIN`` (the range is in the message).
+
     Examples
     --------
     >>> nu, R0 = cell_from_volume_area(90.0, 135.0)   # human red blood cell
     >>> round(nu, 3), round(R0, 3)
     (0.61, 2.78)
     """
-    return (_reduced_volume(volume_fl, area_um2, "volume_fl", "area_um2"),
+    return (_reduced_volume(volume_fl, area_um2, "volume_fl", "area_um2", nu_min=NU_MIN),
             volume_radius(check_positive("volume_fl", volume_fl)))
 
 
@@ -304,7 +339,18 @@ def confinement_from_diameter(R0_um, diameter_um):
     """
     R0_um = check_positive("R0_um", R0_um)
     diameter_um = check_positive("diameter_um", diameter_um)
-    return scalar_or_array(2.0 * R0_um / diameter_um)
+    with np.errstate(over="ignore", under="ignore"):
+        lam = 2.0 * R0_um / diameter_um
+    bad = ~np.isfinite(lam) | (lam == 0.0)
+    if np.any(bad):
+        i = np.flatnonzero(np.ravel(bad))[0]
+        d = float(np.ravel(np.broadcast_to(diameter_um, np.shape(lam)))[i])
+        r = float(np.ravel(np.broadcast_to(R0_um, np.shape(lam)))[i])
+        valid = (f"diameter_um > {2.0 * (r / np.finfo(float).max):.3g} for R0_um={r:.6g}"
+                 if d < r else f"0 < 2 R0_um/diameter_um representable, R0_um={r:.6g}")
+        raise InvalidParameterError("diameter_um", d, valid,
+                                    "the confinement 2 R0/d would overflow or underflow")
+    return scalar_or_array(lam)
 
 
 def critical_diameter_um(nu, R0_um):
@@ -318,7 +364,20 @@ def critical_diameter_um(nu, R0_um):
     2.81
     """
     R0_um = check_positive("R0_um", R0_um)
-    return scalar_or_array(2.0 * R0_um / np.asarray(critical_confinement(nu)))
+    with np.errstate(over="ignore"):
+        d_c = 2.0 * R0_um / np.asarray(critical_confinement(nu))
+    return scalar_or_array(_representable("R0_um", R0_um, d_c, "d_c = 2 R0/lam_c"))
+
+
+def _representable(name, x, result, what):
+    """``result`` if every element is finite, else InvalidParameterError naming ``name``."""
+    bad = ~np.isfinite(result)
+    if np.any(bad):
+        x_b = np.broadcast_to(x, np.shape(result))
+        raise InvalidParameterError(name, x_b[bad] if x_b.ndim else x_b,
+                                    f"{name} small enough that {what} is a finite number",
+                                    "the result would overflow")
+    return result
 
 
 def critical_length_um(nu, R0_um):
@@ -329,4 +388,6 @@ def critical_length_um(nu, R0_um):
     >>> round(critical_length_um(0.6, 2.78), 1)
     15.5
     """
-    return scalar_or_array(np.asarray(critical_length(nu)) * np.asarray(critical_diameter_um(nu, R0_um)) / 2.0)
+    with np.errstate(over="ignore"):
+        L_c = np.asarray(critical_length(nu)) * (np.asarray(critical_diameter_um(nu, R0_um)) / 2.0)
+    return scalar_or_array(_representable("R0_um", R0_um, L_c, "L_c = ell_c d_c/2"))

@@ -13,7 +13,7 @@ import numpy as np
 
 from .asymptotics import (NEAR_CRITICAL_RANGE, SMALL_SPHERE_RANGE, dp_plus_near_critical,
                           dp_plus_small_sphere, speed_near_critical, speed_small_sphere)
-from .checks import OutOfRangeWarning
+from .checks import InvalidParameterError, OutOfRangeWarning
 from .geometry import check_reduced_volume, critical_confinement
 
 __all__ = ["plot_speed_asymptotics", "plot_dp_plus_asymptotics", "plot_shape", "plot_sweep"]
@@ -125,7 +125,15 @@ def plot_shape(result, ax=None):
     Returns
     -------
     ax : matplotlib.axes.Axes
+
+    Raises
+    ------
+    InvalidParameterError
+        ``result`` did not converge (it has no shape to draw).
     """
+    if not result.success:
+        raise InvalidParameterError("result", "not converged", "a converged LubricationResult",
+                                    f"no shape to draw ({result.message})")
     ax = _new_axes(ax)
     x = np.asarray(result.x) - 0.5 * (np.max(result.x) + np.min(result.x))
     r = np.asarray(result.r)

@@ -6,11 +6,17 @@ Units of the fields (project scaling, see :mod:`lubrication.geometry`): lengths 
 :math:`1/R` with the sign convention of the model (negative where the surface is convex).
 
 A result whose ``success`` is False carries NaN in every physical scalar and empty profiles:
-only the inputs, ``message`` and the diagnostics are meaningful then.
+only the inputs, ``message`` and the diagnostics are meaningful then. Its :meth:`to_dict` holds
+None for those scalars, and :meth:`LubricationResult.save` writes only the JSON (no profile CSV).
+
+In :meth:`LubricationResult.to_dict` (and the saved JSON) every number is finite: NaN and
+infinity are written as None (JSON null). The one infinite input, ``ca_b = inf`` of the high-Ca
+model, is therefore ``"ca_b": null`` beside ``"model": "high-Ca"``.
 """
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .io import save_result
+from .io import atomic_write, save_result
 
 __all__ = ["LubricationResult", "PROFILE_COLUMNS"]
 
@@ -36,18 +42,14 @@ PROFILE_COLUMNS = (
 
 
 def _json_scalar(value):
-    """Python scalars for JSON: NaN -> None, inf -> the string "inf", numpy -> float/int."""
+    """Python scalars for JSON: NaN and +-inf -> None, numpy -> float/int (strict JSON)."""
     if isinstance(value, (bool, np.bool_)):
         return bool(value)
     if isinstance(value, (int, np.integer)):
         return int(value)
     if isinstance(value, (float, np.floating)):
         value = float(value)
-        if math.isnan(value):
-            return None
-        if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
-        return value
+        return value if math.isfinite(value) else None
     if isinstance(value, dict):
         return {k: _json_scalar(v) for k, v in value.items()}
     return value
@@ -59,7 +61,8 @@ class LubricationResult:
 
     Inputs
         ``nu`` reduced volume, ``lam`` = R0/R, ``lam_c`` critical confinement, ``ca_b`` =
-        ηUR0²/κ (``inf`` for the high-Ca model), ``model`` ("high-Ca" or "bending").
+        ηUR0²/κ (``inf`` for the high-Ca model; None in :meth:`to_dict`), ``model``
+        ("high-Ca" or "bending").
     Outcome
         ``success`` (all acceptance checks passed), ``message``.
     Scalars
@@ -133,13 +136,19 @@ class LubricationResult:
         return self.success
 
     def to_dict(self) -> dict:
-        """Scalars, diagnostics and provenance as a JSON-ready dict (NaN -> None, inf -> "inf")."""
+        """Scalars, diagnostics and provenance as a strict-JSON-ready dict.
+
+        NaN and infinity become None: the physical scalars of a failed solve, and ``ca_b`` of
+        the high-Ca model (``"ca_b": None, "model": "high-Ca"``).
+        """
         keys = ("nu", "lam", "lam_c", "ca_b", "model", "success", "message", "V_over_U", "Q",
                 "dp_plus_R0", "dp_plus_R", "ell", "film_min", "tension_front", "tension_rear",
                 "tension_max", "curvature_rear", "curvature_front", "shape_class",
                 "force_balance_residual", "area_error", "volume_error", "n_nodes",
                 "max_residual", "tol", "timings", "provenance")
         out = {k: _json_scalar(getattr(self, k)) for k in keys}
+        if not self.success:
+            out["shape_class"] = None          # no shape from a failed solve
         out["lam_ratio"] = _json_scalar(self.lam_ratio)
         out["delta"] = _json_scalar(self.delta)
         out["converged"] = bool(self.success)
@@ -149,16 +158,27 @@ class LubricationResult:
         """The profiles of :data:`PROFILE_COLUMNS` as a dict of equal-length arrays."""
         return {name: np.asarray(getattr(self, name)) for name, _ in PROFILE_COLUMNS}
 
-    def save(self, directory, stem: str | None = None) -> tuple[Path, Path]:
+    def save(self, directory, stem: str | None = None) -> tuple[Path, ...]:
         """Write ``<stem>.json`` (scalars) and ``<stem>.csv`` (profiles) into ``directory``.
 
         Each file is written to a temporary file in the same directory and renamed, so an
         interrupted run never leaves a half-written file. The default stem encodes the inputs,
-        e.g. ``lubrication_nu0.9_lam1.2000_high-Ca``. Returns the two paths.
+        e.g. ``lubrication_nu0.9_lam1.2000_high-Ca``. A failed solve (``success`` False) has no
+        profiles: only the JSON is written (``"converged": false``, the reason, null physical
+        values), with ``_failed`` in the stem. Returns the paths written.
         """
         if stem is None:
             stem = f"lubrication_nu{self.nu:.4g}_lam{self.lam:.6g}_{self.model}"
             if self.model == "bending":
                 stem += f"_caB{self.ca_b:.4g}"
+            if not self.success:
+                stem += "_failed"
+        if not self.success:
+            directory = Path(directory)
+            directory.mkdir(parents=True, exist_ok=True)
+            data = self.to_dict()
+            path = atomic_write(directory / f"{stem}.json", lambda f: json.dump(
+                data, f, indent=2, sort_keys=True, allow_nan=False))
+            return (path,)
         return save_result(directory, stem, self.to_dict(), PROFILE_COLUMNS,
                            lambda name: np.asarray(getattr(self, name)))

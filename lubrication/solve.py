@@ -36,6 +36,32 @@ The method, in the order of this module:
    length L), tensions in ηU.
 
 :func:`sweep_lubrication` solves a list of confinements by continuation.
+
+**Where the model is attempted** (checked by :func:`check_inputs` before any work; outside,
+:class:`~lubrication.checks.InvalidParameterError` naming the parameter and its range):
+``NU_RANGE`` 0.3 <= nu < 1; ``CA_B_RANGE`` 1e-2 <= Ca_B <= 1e5 or inf; lam/lam_c from
+``MIN_LAM_RATIO`` = 0.1 (the parallel-flow model needs a vesicle that nearly fills the tube) and,
+for the high-Ca model, from the measured end of its branch (``HIGH_CA_BRANCH_END``: 0.597 at
+nu = 0.9), below which that model has no solution; up to 1 (exclusive: critical confinement).
+
+**Resource envelope** (measured on a shared 2-core machine, tol = 1e-7):
+
+* Mesh: at most ``max_nodes`` (default 20 000, at most ``MAX_NODES`` = 20 000) nodes per
+  solve_bvp call; a cold start away from critical confinement at most 8000, a continuation step
+  at most max(5000, 3 x its start), a warm start's mesh is thinned above 1500 nodes. The
+  longest stretch in compiled code is the sparse LU of one Newton step: 0.46 s at 6200 nodes
+  (8 unknowns), 1.0 s at 15 400 nodes, 2.0 s at 43 000 nodes; hence the cap, so that Ctrl-C
+  (honoured whenever control returns to Python) and ``max_time`` act within about 1-2 s.
+* Continuation: steps in lam/lam_c of at most ``MAX_STEP`` = 0.02 and at most half the
+  clearance, at least ``MIN_STEP`` = 5e-4, and at most ``MAX_CONTINUATION_STEPS`` attempts per
+  march; in Ca_B, factors of 3 from 1e4 down to Ca_B (at most 13 steps at Ca_B = 1e-2).
+* Wall time: one point near critical 0.5-3 s (cold start); far from it, reached by
+  continuation from lam/lam_c = 0.98, 10-30 s (high-Ca down to its branch end at nu = 0.9:
+  13 s), up to ~2 min for the bending model near the end of its branch; a warm-started sweep
+  point 0.2-1 s. ``max_time`` (seconds, :class:`~lubrication.checks.Deadline`) bounds any
+  solve: it is tested at every right-hand-side evaluation of solve_bvp and between attempts
+  and continuation steps, and a spent budget returns ``success=False`` with the reason.
+* Sweeps: at most ``MAX_SWEEP_POINTS`` = 2000 points.
 """
 
 from __future__ import annotations
@@ -51,13 +77,15 @@ import numpy as np
 import scipy
 from scipy.integrate import cumulative_trapezoid, solve_bvp
 
-from .checks import InvalidParameterError, check_positive, check_range
+from .checks import CannotPassError, Deadline, InvalidParameterError, check_range
 from .equations import (BENDING_STATE, HIGH_CA_STATE, _gap_flow, capillary_number, rhs_bending,
                         rhs_high_ca, spherical_cap)
-from .geometry import critical_length, resolve_confinement
+from .geometry import critical_confinement, critical_length
 from .results import LubricationResult
 
-__all__ = ["solve_lubrication", "sweep_lubrication", "CAP_RADIUS", "CONSTRAINT_TOL", "FORCE_TOL"]
+__all__ = ["solve_lubrication", "sweep_lubrication", "check_inputs", "lowest_lam_ratio",
+           "high_ca_branch_end", "CAP_RADIUS", "CONSTRAINT_TOL", "FORCE_TOL", "NU_RANGE",
+           "MIN_LAM_RATIO", "CA_B_RANGE", "HIGH_CA_BRANCH_END", "MAX_SWEEP_POINTS"]
 
 logger = logging.getLogger(__name__)
 
@@ -71,9 +99,169 @@ CAP_RADIUS = 2e-3
 # vesicle relative to the scale of its pressure force (physics notes §4).
 CONSTRAINT_TOL = 1e-8
 FORCE_TOL = 1e-3
+# Resource envelope (module docstring). Largest mesh of one solve_bvp call: its Newton steps
+# factorise a sparse system of (6 or 8) x nodes unknowns, the longest stretch in compiled code
+# (where Ctrl-C waits): 1.0 s at 15 400 nodes, 2.0 s at 43 000 (measured, bending model).
+MAX_NODES = 20_000
+# Smallest continuation step in lam/lam_c: below it the branch is taken to end (or fold).
+MIN_STEP = 5e-4
+# Most solve attempts of one continuation in lam/lam_c: a full march from ANCHOR_RATIO to
+# MIN_LAM_RATIO at the smallest step; measured marches take 20-200.
+MAX_CONTINUATION_STEPS = 2000
+# Most points of one sweep: 2000 points over 0 < lam/lam_c < 1 are 5e-4 = MIN_STEP apart, so a
+# denser sweep resolves nothing the continuation itself could; at 0.2-1 s per warm-started point
+# (measured) 2000 points take 10-30 minutes.
+MAX_SWEEP_POINTS = 2000
 
 
 # --------------------------------------------------------------------------- 1. inputs, targets
+# Where the model is attempted (checked before any work; outside: InvalidParameterError).
+#
+# Reduced volume: the solver is measured for 0.3 <= nu <= 0.999 (tests/lubrication and the
+# branch ends below; nu = 0.3-0.4 converge near critical, 0.99-0.999, in both models in 1-3 s).
+# Below, the vesicle (length ~ 2 nu^(-2/3) lam_c^2 R: 49 R at nu = 0.3, 450 R at nu = 0.1) is
+# untested, and a nu of 0 or a subnormal one would make lam_c overflow.
+NU_RANGE = (0.3, 1.0)
+# Smallest lam/lam_c in every model. The parallel-flow model needs a vesicle that nearly fills
+# the tube (gap small against length); it is qualitative already below lam/lam_c ~ 0.45 (dp+ < 0
+# at nu = 0.9). At 0.1 the vesicle is a body of radius ~0.1 R in a tube (the small-object limits
+# of Faxen and Chen et al. 2020 eq. small1/small2, or the BEM, apply there), and below
+# CAP_RADIUS / lam_c the excised polar caps would be wider than the vesicle.
+MIN_LAM_RATIO = 0.1
+# Bending capillary number Ca_B = eta U R0^2/kappa of the bending model (measured at nu = 0.9,
+# lam/lam_c = 0.99): 1e-2 converges in 1.3 s (13 continuation steps in Ca from 1e4); at 1e5 the
+# bending model agrees with the high-Ca model (ca_b=inf) to 1e-10 in V/U and 1e-8 in dp+, and
+# above it the stiff bending problem takes ever longer (40 s at 1e7): use ca_b=inf there.
+CA_B_RANGE = (1e-2, 1e5)
+# End of the high-Ca branch: lowest lam/lam_c reached by continuation from 0.98 in lam/lam_c
+# (steps down to 5e-4; precision ~1e-3) before the rear pole flattens and the tension vanishes
+# there, so the tension-only (kappa -> 0) model has no physical solution below (measured with
+# this solver, tol 1e-7; (nu, lowest lam/lam_c) pairs, linear interpolation in between).
+# Below nu = 0.45 the end lies above the anchor 0.98 of the continuation (nu = 0.4 fails there)
+# and was not measured: the value at 0.45 is used, a lower bound (the end rises as nu falls). At
+# nu = 0.997 and 0.999 the branch was followed down to lam/lam_c = 0.1 and 0.05 without ending.
+HIGH_CA_BRANCH_END = (
+    (0.45, 0.9688), (0.475, 0.9617), (0.5, 0.9536), (0.55, 0.9338), (0.6, 0.9081),
+    (0.65, 0.8768), (0.7, 0.8379), (0.75, 0.7925), (0.8, 0.7375), (0.85, 0.6725), (0.9, 0.5968),
+    (0.93, 0.5509), (0.95, 0.5081), (0.96, 0.4744), (0.97, 0.4250), (0.98, 0.3450),
+    (0.985, 0.2881), (0.99, 0.2116), (0.9925, 0.1624), (0.995, 0.1031), (0.997, 0.1),
+    (0.999, 0.05),
+)
+
+
+def high_ca_branch_end(nu) -> float:
+    """Lowest lam/lam_c of the high-Ca (``ca_b=inf``) model at reduced volume ``nu`` (measured).
+
+    Linear interpolation in :data:`HIGH_CA_BRANCH_END` (constant beyond its ends). Below it the
+    rear pole of the tension-only membrane would have to turn concave, which needs bending: the
+    high-Ca model has no solution there, the bending model (finite ``ca_b``) continues into
+    parachutes (Barakat & Shaqfeh 2018b).
+
+    Examples
+    --------
+    >>> high_ca_branch_end(0.9)
+    0.5968
+    """
+    table = np.array(HIGH_CA_BRANCH_END)
+    return float(np.interp(nu, table[:, 0], table[:, 1]))
+
+
+def lowest_lam_ratio(nu, ca_b=math.inf) -> float:
+    """Lowest lam/lam_c the solver attempts for ``nu`` and ``ca_b``: :data:`MIN_LAM_RATIO`, and
+    for the high-Ca model (``ca_b=inf``) the end of its branch, :func:`high_ca_branch_end`.
+
+    Examples
+    --------
+    >>> lowest_lam_ratio(0.9), lowest_lam_ratio(0.9, 50.0)
+    (0.5968, 0.1)
+    """
+    if ca_b == math.inf:
+        return max(MIN_LAM_RATIO, high_ca_branch_end(nu))
+    return MIN_LAM_RATIO
+
+
+#: Names of the inputs in messages (the command line passes its option names instead).
+PARAMETER_NAMES = {"nu": "nu", "lam": "lam", "lam_ratio": "lam_ratio", "ca_b": "ca_b"}
+
+
+def check_inputs(nu, lam=None, lam_ratio=None, ca_b=math.inf, *, names=None):
+    """Checked ``(nu, lam, lam_c, ca_b)`` of a lubrication solve, before any work.
+
+    Exactly one of ``lam``, ``lam_ratio``; ``nu`` in :data:`NU_RANGE` (open at 1), ``ca_b`` in
+    :data:`CA_B_RANGE` or ``math.inf``; lam/lam_c below 1 (else :class:`CannotPassError`) and
+    at least :func:`lowest_lam_ratio` (the model has no solution or does not apply below). The
+    messages name the parameter through ``names`` (default :data:`PARAMETER_NAMES`; the command
+    line passes ``{"nu": "--nu", ...}``) and give the valid range in the unit of the value that
+    was given (lam or lam/lam_c).
+
+    Raises
+    ------
+    InvalidParameterError
+        A value NaN, infinite, of the wrong type or outside its range (the message names it).
+    CannotPassError
+        lam >= lam_c(nu).
+    """
+    n = dict(PARAMETER_NAMES, **(names or {}))
+    nu = float(check_range(n["nu"], nu, *NU_RANGE, hi_open=True,
+                           reason="the lubrication solver is measured for deflated vesicles "
+                                  f"{NU_RANGE[0]:g} <= nu < 1 (a sphere cannot deform; more "
+                                  "deflated ones are longer than 50 tube radii, untested)"))
+    if (lam is None) == (lam_ratio is None):
+        raise InvalidParameterError(n["lam"], "both" if lam is not None else "neither",
+                                    f"give exactly one of {n['lam']} and {n['lam_ratio']}")
+    if isinstance(ca_b, (int, float, np.integer, np.floating)) and ca_b == math.inf:
+        ca_b = math.inf
+    else:
+        ca_b = float(check_range(n["ca_b"], ca_b, *CA_B_RANGE,
+                                 reason=f"bending capillary number; {n['ca_b']}=inf selects the "
+                                        "high-Ca (kappa -> 0) model, which bending approaches "
+                                        f"within 1e-8 at {CA_B_RANGE[1]:g}"))
+    lam_c = float(critical_confinement(nu))
+    lowest = lowest_lam_ratio(nu, ca_b)
+    if ca_b == math.inf and lowest > MIN_LAM_RATIO:
+        why = (f"the high-Ca model ({n['ca_b']}=inf) has no solution below lam/lam_c = "
+               f"{lowest:.4g} at nu={nu:g} (its branch ends where the rear pole flattens); "
+               f"give a finite bending capillary number, e.g. {n['ca_b']}=50 (Chen et al. 2020)")
+    else:
+        why = (f"the lubrication (parallel-flow) model needs a vesicle that nearly fills the tube "
+               f"and is not applied below lam/lam_c = {MIN_LAM_RATIO:g}; use the BEM "
+               "(vesicle-tube bem vesicle) or the small-object limits there")
+    if lam is None:
+        name = n["lam_ratio"]
+        ratio = float(check_range(name, lam_ratio, 0.0, 1.0, lo_open=True, hi_open=True,
+                                  reason="lam/lam_c >= 1: the vesicle cannot pass this tube "
+                                         "intact" if _at_least_one(lam_ratio) else "",
+                                  error=CannotPassError if _at_least_one(lam_ratio)
+                                  else InvalidParameterError))
+        if ratio < lowest:
+            raise InvalidParameterError(name, ratio, f"{lowest:.4g} <= {name} < 1", why)
+        lam = ratio * lam_c
+    else:
+        name = n["lam"]
+        lam = float(check_range(name, lam, 0.0, lam_c, lo_open=True, hi_open=True,
+                                reason="lam >= lam_c(nu): the vesicle cannot pass this tube "
+                                       "intact" if _at_least(lam, lam_c) else "",
+                                error=CannotPassError if _at_least(lam, lam_c)
+                                else InvalidParameterError))
+        if lam < lowest * lam_c:
+            raise InvalidParameterError(name, lam, f"{lowest * lam_c:.4g} <= {name} < "
+                                        f"lam_c = {lam_c:.6g} at nu={nu:g}", why)
+    return nu, lam, lam_c, ca_b
+
+
+def _at_least(x, bound) -> bool:
+    """``x >= bound`` for a finite real ``x``; False for anything else (checked elsewhere)."""
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return False
+    return math.isfinite(x) and x >= bound
+
+
+def _at_least_one(x) -> bool:
+    return _at_least(x, 1.0)
+
+
 @dataclass(frozen=True)
 class _Problem:
     nu: float
@@ -82,6 +270,7 @@ class _Problem:
     ca_b: float
     tol: float
     max_nodes: int
+    deadline: Deadline = Deadline(None)
 
     @property
     def delta(self) -> float:
@@ -102,19 +291,16 @@ class _Problem:
         return 4.0 / 3.0 * math.pi * self.lam**3
 
 
-def _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes) -> _Problem:
-    nu, lam, lam_c = resolve_confinement(
-        nu, lam, lam_ratio, nu_reason="the lubrication model needs a deflated vesicle (nu < 1)")
-    if isinstance(ca_b, (int, float, np.floating)) and ca_b == math.inf:
-        ca_b = math.inf
-    else:
-        ca_b = float(check_positive("ca_b", ca_b,
-                                    reason="use ca_b=math.inf for the high-Ca (kappa -> 0) model"))
+def _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes, max_time=None) -> _Problem:
+    nu, lam, lam_c, ca_b = check_inputs(nu, lam, lam_ratio, ca_b)
     tol = float(check_range("tol", tol, 1e-12, 1e-3,
                             reason="solve_bvp's relative residual tolerance"))
-    if not isinstance(max_nodes, (int, np.integer)) or max_nodes < 100:
-        raise InvalidParameterError("max_nodes", max_nodes, "an integer >= 100")
-    return _Problem(nu, lam, lam_c, ca_b, tol, int(max_nodes))
+    if (not isinstance(max_nodes, (int, np.integer)) or isinstance(max_nodes, bool)
+            or not 100 <= max_nodes <= MAX_NODES):
+        raise InvalidParameterError("max_nodes", max_nodes, f"an integer, 100 <= max_nodes <= "
+                                    f"{MAX_NODES}", "the mesh bounds the time of one solve_bvp "
+                                    "call (module docstring: resource envelope)")
+    return _Problem(nu, lam, lam_c, ca_b, tol, int(max_nodes), Deadline(max_time))
 
 
 # --------------------------------------------------------------------------- 2.-3. initial guess
@@ -186,9 +372,22 @@ def _rescaled_guess(prob: _Problem, state):
 
 
 # --------------------------------------------------------------------------- 4. high-Ca problem
+class _OutOfTime(Exception):
+    """Raised inside solve_bvp's right-hand side once the deadline is spent; caught by
+    :func:`_attempt`, which returns an unconverged attempt (never leaves this module)."""
+
+
 def _solve_scaled(fun, bc, t, y, params, scales, prob):
-    """solve_bvp on the unknowns divided by ``scales`` (an (n, 1) array); returns unscaled."""
+    """solve_bvp on the unknowns divided by ``scales`` (an (n, 1) array); returns unscaled.
+
+    The deadline of ``prob`` is tested at every evaluation of the right-hand side (many per
+    Newton iteration), so a spent budget stops even a long solve_bvp call within one of them.
+    """
+    expired = prob.deadline.expired
+
     def scaled_fun(t_, yh, p):
+        if expired():
+            raise _OutOfTime
         return fun(t_, yh * scales, p) / scales
 
     def scaled_bc(ya, yb, p):
@@ -447,10 +646,14 @@ def _attempt(prob, model, guess):
     """One solve_bvp run from a guess (t, y, params): (sol, y, diag, ok, message)."""
     t, y, params = guess
     solver = _solve_high_ca if model == "high-Ca" else _solve_bending
+    if prob.deadline.expired():
+        return None, None, {}, False, prob.deadline.message()
     with np.errstate(all="ignore"):        # iterates may leave the domain; judged below
         try:
             sol, y_sol = solver(prob, t, y, params)
             diag = _diagnose(prob, model, sol, y_sol)
+        except _OutOfTime:
+            return None, None, {}, False, prob.deadline.message()
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
             return None, None, {}, False, f"not converged: solve_bvp failed ({exc})"
     ok, message = _verdict(prob, model, diag)
@@ -469,7 +672,7 @@ def _bending_by_ca_continuation(prob, sol, y):
     for path in paths:
         t, y_k, params = sol.x, y, sol.p
         for k, ca_b in enumerate(path):
-            step = _Problem(prob.nu, prob.lam, prob.lam_c, float(ca_b), prob.tol, prob.max_nodes)
+            step = replace(prob, ca_b=float(ca_b))
             if k == 0:
                 y_k = _bending_from_high_ca(step, t, y_k, params, float(ca_b))
             else:      # at fixed eta V the bending-unit p, sigma scale like Ca, q_s like Ca^(1/2)
@@ -480,9 +683,14 @@ def _bending_by_ca_continuation(prob, sol, y):
             if not ok:
                 logger.debug("bending at Ca_B=%g on the path %s failed: %s", ca_b, path, message)
                 break
+            if prob.deadline.expired():
+                ok, message = False, prob.deadline.message()
+                break
             t, y_k, params = b_sol.x, b_y, b_sol.p
         if ok:
             return b_sol, b_y, diag, True, message
+        if prob.deadline.expired():
+            return None, None, diag, False, prob.deadline.message()
     return None, None, diag, False, message
 
 
@@ -495,13 +703,16 @@ def _point(prob: _Problem, initial: LubricationResult | None, cold: bool) -> Lub
     # 1) same-model warm start
     if state is not None and state[0] == prob.model:
         sol, y, diag, ok, message = _attempt(prob, prob.model, _rescaled_guess(prob, state)[1:])
-        message = "warm start " + message
         if ok:
             timings["total"] = time.perf_counter() - clock
-            return _result(prob, prob.model, sol, y, diag, message, timings)
+            return _result(prob, prob.model, sol, y, diag, "warm start " + message, timings)
+        if prob.deadline.expired():
+            timings["total"] = time.perf_counter() - clock
+            return _failed(prob, prob.deadline.message(), diag, timings)
+        message = "warm start " + message
         logger.debug("warm start failed: %s", message)
     # 2) high-Ca from a high-Ca warm start, else from the spherocylinder
-    high = _Problem(prob.nu, prob.lam, prob.lam_c, math.inf, prob.tol, prob.max_nodes)
+    high = replace(prob, ca_b=math.inf)
     guesses = []
     if state is not None and state[0] == "high-Ca" and prob.model == "bending":
         guesses.append(_rescaled_guess(high, state)[1:])
@@ -509,7 +720,7 @@ def _point(prob: _Problem, initial: LubricationResult | None, cold: bool) -> Lub
         guesses.append(_spherocylinder_guess(high))
     for guess in guesses:
         sol, y, diag, ok, message = _attempt(high, "high-Ca", guess)
-        if ok:
+        if ok or prob.deadline.expired():
             break
     timings["high_ca"] = time.perf_counter() - clock
     if ok and prob.model == "bending":
@@ -531,14 +742,18 @@ def _march(prob: _Problem, start: LubricationResult, ratio: float, max_step: flo
     1.5 after a success and halves after a failure, down to ``min_step``. Returns the result at
     ``ratio``, success False if the continuation got stuck (a fold or the end of the branch).
     """
-    min_step = 5e-4        # below this the branch is taken to end (or fold) here
+    min_step = MIN_STEP    # below this the branch is taken to end (or fold) here
     current, step = start, max_step
     clock = time.perf_counter()
-    while True:
+    for _ in range(MAX_CONTINUATION_STEPS):
         here = current.lam / current.lam_c
         gap = ratio - here
         if abs(gap) <= 1e-12 * ratio:
             return current
+        if prob.deadline.expired():
+            return _failed(prob, f"{prob.deadline.message()} (the continuation in lam/lam_c "
+                                 f"had reached {here:.6g} on the way to {ratio:.6g})", {},
+                           {"total": time.perf_counter() - clock})
         limit = min(step, 0.5 * (1.0 - here))
         nxt = ratio if abs(gap) <= limit else here + math.copysign(limit, gap)
         # A warm step that needs many more nodes than its start has diverged: cap its mesh.
@@ -556,6 +771,9 @@ def _march(prob: _Problem, start: LubricationResult, ratio: float, max_step: flo
                                  f"{current.tension_rear:.3g} eta U); last attempt: "
                                  f"{trial.message}", {},
                            {"total": time.perf_counter() - clock})
+    return _failed(prob, f"continuation in lam/lam_c stopped after {MAX_CONTINUATION_STEPS} "
+                         f"steps at {current.lam / current.lam_c:.6g} on the way to {ratio:.6g}",
+                   {}, {"total": time.perf_counter() - clock})
 
 
 # Cold starts (the spherocylinder) converge near critical confinement; below ANCHOR_RATIO a
@@ -565,53 +783,70 @@ MAX_STEP = 0.02
 
 
 def solve_lubrication(nu, lam=None, *, lam_ratio=None, ca_b=math.inf, initial=None, tol=1e-7,
-                      max_nodes=20_000) -> LubricationResult:
+                      max_nodes=20_000, max_time=None) -> LubricationResult:
     r"""Steady shape, speed, extra pressure drop and tension of a vesicle in a tube (lubrication).
 
     Solves the parallel-flow lubrication model of Secomb et al. (1986) in the form of Barakat &
     Shaqfeh (2018b): high-Ca (tension only, ``ca_b=inf``) or with Helfrich bending (finite
-    ``ca_b``). See the module docstring for the method and the acceptance checks. Without
-    ``initial``, the spherocylinder guess is tried first; if it fails below
+    ``ca_b``). See the module docstring for the method, the acceptance checks and the resource
+    envelope. Without ``initial``, the spherocylinder guess is tried first; if it fails below
     ``lam_ratio = ANCHOR_RATIO`` the point is reached by continuation from ``ANCHOR_RATIO``.
 
     Parameters
     ----------
     nu : float
-        Reduced volume, 0 < nu < 1 [-].
+        Reduced volume, 0.3 <= nu < 1 [-] (:data:`NU_RANGE`).
     lam : float, optional
-        Confinement R0/R, 0 < lam < lam_c(nu) [-]. Give exactly one of ``lam``, ``lam_ratio``.
+        Confinement R0/R, lowest_lam_ratio(nu, ca_b) lam_c <= lam < lam_c(nu) [-]. Give exactly
+        one of ``lam``, ``lam_ratio``.
     lam_ratio : float, optional
-        lam / lam_c, 0 < lam_ratio < 1 [-].
+        lam / lam_c, :func:`lowest_lam_ratio` <= lam_ratio < 1 [-]: at least
+        :data:`MIN_LAM_RATIO` = 0.1, and for the high-Ca model at least the end of its branch
+        (:func:`high_ca_branch_end`: 0.954, 0.908, 0.838, 0.738, 0.597, 0.345 at nu = 0.5, 0.6,
+        0.7, 0.8, 0.9, 0.98).
     ca_b : float
-        Bending capillary number eta U R0^2 / kappa, > 0 [-]; ``math.inf`` (default) for the
-        high-Ca model.
+        Bending capillary number eta U R0^2 / kappa, 1e-2 <= ca_b <= 1e5 [-]
+        (:data:`CA_B_RANGE`); ``math.inf`` (default) for the high-Ca model.
     initial : LubricationResult, optional
         A converged solution to start from (warm start), preferably at the same nu and a nearby
         lam; it is rescaled to the new clearance. If it fails, the cold start is tried.
     tol : float
         Relative collocation tolerance of :func:`scipy.integrate.solve_bvp`, 1e-12 to 1e-3.
     max_nodes : int
-        Largest mesh, >= 100.
+        Largest mesh, 100 <= max_nodes <= :data:`MAX_NODES`.
+    max_time : float, optional
+        Wall-time budget [s], > 0; None (default): no limit. When it is spent the solve stops
+        (within one evaluation of the right-hand side) and returns ``success=False`` with the
+        reason in ``message``; it never raises for it.
 
     Returns
     -------
     LubricationResult
         ``success`` False, NaN outputs and the reason in ``message`` when no solution passed the
-        acceptance checks.
+        acceptance checks or the time ran out.
 
     Notes
     -----
     Range (measured, tol = 1e-7): every nu in [0.6, 0.98] converges up to lam/lam_c = 0.9999 in
     both models. The high-Ca branch ends where the rear pole flattens: lowest lam/lam_c = 0.909,
-    0.838, 0.738, 0.597, 0.346 for nu = 0.6, 0.7, 0.8, 0.9, 0.98. With Ca_B = 50 the bending model
-    continues into parachutes down to 0.704, 0.539, < 0.1, 0.209, 0.204. The parallel-flow
+    0.838, 0.738, 0.597, 0.346 for nu = 0.6, 0.7, 0.8, 0.9, 0.98 (:data:`HIGH_CA_BRANCH_END`).
+    Below it the high-Ca model has no solution at all, whatever the solver: that is a limit of
+    the model, known before any work, so such input raises :class:`InvalidParameterError`
+    (exit 2 on the command line, with the advice to give a finite ``ca_b``) instead of failing
+    after a 20 s continuation. Within ~1e-3 above the tabulated end the continuation may still
+    stop: that is a solver failure, returned as ``success=False``. With Ca_B = 50 the bending
+    model continues into parachutes down to 0.704, 0.539, < 0.1, 0.209, 0.204 (a single-point
+    continuation from 0.98 at nu = 0.8 stopped at 0.177 after 135 s: the bending range depends on
+    the path); there a failure is a solver limit, not known in advance, and is returned, not
+    raised. The parallel-flow
     approximation needs a long vesicle with small slopes; for short vesicles it is qualitative
     only, and it gives dp+ < 0 (unphysical) below lam/lam_c ~ 0.45 at nu = 0.9.
 
     Raises
     ------
     InvalidParameterError
-        Bad input (nu outside (0, 1), ca_b <= 0, NaN, ...).
+        Bad input (nu outside NU_RANGE, ca_b outside CA_B_RANGE, NaN, lam/lam_c below the
+        model's lowest, max_time <= 0, ...); the message names the parameter and its range.
     CannotPassError
         lam >= lam_c(nu).
 
@@ -621,28 +856,36 @@ def solve_lubrication(nu, lam=None, *, lam_ratio=None, ca_b=math.inf, initial=No
     >>> res.success, round(res.V_over_U, 4), res.shape_class
     (True, 1.0096, 'bullet')
     """
-    prob = _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes)
+    prob = _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes, max_time)
     if initial is not None and not isinstance(initial, LubricationResult):
         raise InvalidParameterError("initial", type(initial).__name__,
                                     "a LubricationResult or None")
+    return _solve_point(prob, initial)
+
+
+def _solve_point(prob: _Problem, initial) -> LubricationResult:
+    """:func:`solve_lubrication` on checked inputs (the deadline is that of ``prob``)."""
     clock = time.perf_counter()
     ratio = prob.lam / prob.lam_c
     # Away from critical a cold start that needs more nodes than this has diverged (converged
     # cold solutions there use < 5000 at tol = 1e-7): fail early and continue from the anchor.
     cold_nodes = prob.max_nodes if ratio >= ANCHOR_RATIO or initial is not None else 8000
     result = _point(replace(prob, max_nodes=min(prob.max_nodes, cold_nodes)), initial, cold=True)
-    if not result.success and ratio < ANCHOR_RATIO:
+    if not result.success and ratio < ANCHOR_RATIO and not prob.deadline.expired():
         logger.info("nu=%.4g lam/lam_c=%.6g: cold start failed, continuing from %g",
                     prob.nu, ratio, ANCHOR_RATIO)
         anchor = _point(replace(prob, lam=ANCHOR_RATIO * prob.lam_c), None, cold=True)
         if anchor.success:
             result = _march(prob, anchor, ratio, MAX_STEP)
+        elif prob.deadline.expired():
+            result = _failed(prob, anchor.message, {}, anchor.timings)
     timings = dict(result.timings, total=time.perf_counter() - clock)
     return replace(result, timings=timings)
 
 
 def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
-                      max_nodes=20_000, max_step=MAX_STEP) -> list[LubricationResult]:
+                      max_nodes=20_000, max_step=MAX_STEP,
+                      max_time=None) -> list[LubricationResult]:
     r"""Solve a list of confinements by warm-started continuation in lam/lam_c.
 
     The sweep starts from a cold solution at the requested ratio nearest to ``ANCHOR_RATIO``
@@ -655,9 +898,10 @@ def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
     Parameters
     ----------
     nu : float
-        Reduced volume, 0 < nu < 1 [-].
+        Reduced volume, 0.3 <= nu < 1 [-].
     lam_ratios : array_like
-        lam / lam_c values, each in (0, 1) [-], any order.
+        lam / lam_c values, each in [lowest_lam_ratio(nu, ca_b), 1) [-], any order; at most
+        :data:`MAX_SWEEP_POINTS` of them.
     ca_b : float
         Bending capillary number eta U R0^2/kappa [-]; ``math.inf`` for the high-Ca model.
     progress : bool
@@ -666,6 +910,9 @@ def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
         As in :func:`solve_lubrication`.
     max_step : float
         Largest continuation step in lam/lam_c.
+    max_time : float, optional
+        Wall-time budget of the whole sweep [s]; once spent, the point being solved and all
+        points not yet solved are returned with ``success=False`` and the reason.
 
     Returns
     -------
@@ -678,19 +925,29 @@ def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
     >>> [r.success for r in out], out[0].V_over_U < out[1].V_over_U
     ([True, True], True)
     """
-    ratios = check_range("lam_ratios", np.atleast_1d(np.asarray(lam_ratios, dtype=float)),
-                         0.0, 1.0, lo_open=True, hi_open=True, reason="lam/lam_c of each point")
+    try:
+        ratios = np.atleast_1d(np.asarray(lam_ratios, dtype=float))
+    except (TypeError, ValueError):
+        raise InvalidParameterError("lam_ratios", str(lam_ratios),
+                                    "a non-empty 1-d sequence of numbers") from None
     if ratios.ndim != 1 or ratios.size == 0:
         raise InvalidParameterError("lam_ratios", ratios, "a non-empty 1-d sequence")
+    if ratios.size > MAX_SWEEP_POINTS:
+        raise InvalidParameterError("lam_ratios", float(ratios.size),
+                                    f"at most {MAX_SWEEP_POINTS} points",
+                                    "points closer than the smallest continuation step "
+                                    f"{MIN_STEP:g} resolve nothing more; split the sweep")
+    check_range("lam_ratios", ratios, 0.0, 1.0, lo_open=True, hi_open=True,
+                reason="lam/lam_c of each point")
     max_step = float(check_range("max_step", max_step, 1e-4, 0.5))
-    base = _check_inputs(nu, None, float(ratios[0]), ca_b, tol, max_nodes)
+    # the lowest ratio carries the model's range check (its message names the value)
+    base = _check_inputs(nu, None, float(ratios.min()), ca_b, tol, max_nodes, max_time)
     from tqdm.auto import tqdm
     bar = tqdm(total=ratios.size, disable=not progress, desc=f"lubrication nu={base.nu:g}",
                unit="point")
     results: list[LubricationResult | None] = [None] * ratios.size
     i_anchor = int(np.argmin(np.abs(ratios - ANCHOR_RATIO)))
-    anchor = solve_lubrication(base.nu, lam_ratio=float(ratios[i_anchor]), ca_b=base.ca_b,
-                               tol=base.tol, max_nodes=base.max_nodes)
+    anchor = _solve_point(replace(base, lam=float(ratios[i_anchor]) * base.lam_c), None)
     results[i_anchor] = anchor
     bar.update(1)
     order = np.argsort(ratios, kind="stable")
@@ -700,7 +957,9 @@ def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
         for i in direction:
             ratio = float(ratios[i])
             prob = replace(base, lam=ratio * base.lam_c)
-            if not current.success:
+            if base.deadline.expired():
+                res = _failed(prob, f"not attempted: {base.deadline.message()}", {}, {})
+            elif not current.success:
                 res = _failed(prob, f"not attempted: the continuation failed before "
                                     f"lam/lam_c = {ratio:.6g} ({current.message})", {}, {})
             else:

@@ -51,10 +51,10 @@ FAHRAEUS_AB = {"pries1990": (0.415, 0.011), "pries1992": (0.35, 0.01)}
 
 COMMANDS = {   # name: (argv, JSON keys that must be present, units the table must show)
     "estimate": (["estimate", "--diameter-um", "3", "--hematocrit", "0.3"], ESTIMATE_KEYS,
-                 ("um", "mm/s", "Pa", "nm", "mN/m", "dp+ R0/(eta U)")),
+                 ("um", "mm/s", "Pa", "nm", "mN/m", "eta U/R0")),
     "estimate-dimensionless": (["estimate", "--nu", "0.9", "--lam", "1.25", "--hematocrit", "0.3"],
                                ESTIMATE_KEYS[:-4] + ("passes",),
-                               ("dp+ R0/(eta U)", "dp+ R/(eta U)", "h/R", "L/R", "eta V")),
+                               ("eta U/R0", "eta U/R", "R", "R_c", "eta V", "eta U")),
     "geometry": (["geometry", "--volume-fl", "90", "--area-um2", "135", "--diameter-um", "4"],
                  ("nu", "lam", "lam_c", "ell_c", "delta", "d_c_um", "L_c_um", "R0_um", "passes"),
                  ("um",)),
@@ -65,19 +65,30 @@ COMMANDS = {   # name: (argv, JSON keys that must be present, units the table mu
     "viscosity-single-file": (["viscosity", "--diameter-um", "3", "--hematocrit", "0.45",
                                "--law", "single-file"],
                               ("eta_rel", "tube_hematocrit", "discharge_hematocrit", "dp_plus_R0"),
-                              ("um", "dp+ R0/(eta U)")),
+                              ("um", "eta U/R0")),
     "fahraeus": (["fahraeus", "--diameter-um", "10", "--discharge-hematocrit", "0.45"],
                  ("tube_hematocrit", "discharge_hematocrit"), ("um",)),
 }
 
 
+#: What a unit cell may hold (the convention of correlations.cli.UNIT_CONVENTION): a physical
+#: unit, the scale of a dimensionless value, "-" (plain dimensionless) or "" (not a number).
+UNIT_CELLS = {"um", "mm/s", "Pa", "nm", "mN/m", "R", "R_c", "eta U/R0", "eta U/R", "eta V",
+              "eta U", "-", ""}
+
+
 def _unit_column(table: str) -> set:
-    """The entries of the 'unit' column of a format_rows table."""
+    """The entries of the 'unit' column of a format_rows table (up to the table's end)."""
     lines = table.splitlines()
     head = next(i for i, line in enumerate(lines) if line.startswith("quantity"))
     start = lines[head].index("unit")
     end = lines[head].index("method")
-    return {line[start:end].strip() for line in lines[head + 2:] if len(line) > start}
+    rows = []
+    for line in lines[head + 2:]:
+        if not line.strip() or line.startswith("unit column:"):
+            break
+        rows.append(line)
+    return {line[start:end].strip() for line in rows if len(line) > start}
 
 
 @pytest.mark.parametrize("name", COMMANDS)
@@ -90,6 +101,7 @@ def test_human_table_with_units(cli, name):
     column = _unit_column(out)
     for unit in units:
         assert unit in column or re.search(rf"\b{re.escape(unit)}\b", out.splitlines()[0]), (unit, column)
+    assert column <= UNIT_CELLS, column - UNIT_CELLS
 
 
 @pytest.mark.parametrize("name", COMMANDS)
@@ -296,7 +308,8 @@ def test_out_of_range_viscosity_warns_on_stderr_and_in_json(cli):
 
 
 @pytest.mark.parametrize("argv", [
-    ["fahraeus", "--diameter-um", "2", "--discharge-hematocrit", "0.45"],
+    ["fahraeus", "--diameter-um", "3.2", "--discharge-hematocrit", "0.45"],
+    ["viscosity", "--diameter-um", "2", "--hematocrit", "0.45"],
     ["viscosity", "--diameter-um", "12", "--hematocrit", "0.45", "--law", "single-file",
      "--extrapolate"],
     pytest.param(["viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--law", "single-file"], id="single-file-no-dp"),
@@ -364,3 +377,180 @@ def test_geometry_clearance(cli):
 def test_viscosity_json_names_the_fahraeus_constants_it_used(cli):
     _, out, _ = cli("viscosity", "--diameter-um", "10", "--hematocrit", "0.45", "--json")
     assert strict_json(out)["fahraeus_constants"] == "pries1992"
+
+
+# ------------------------------------------------------------------------------------------
+# Every numeric option, every kind of bad number: exit 2 naming the option, or finite output.
+# ------------------------------------------------------------------------------------------
+
+NUMERIC_OPTIONS = {   # base command line: the numeric options it takes
+    "geometry-nu": (["geometry", "--nu", "0.6", "--lam", "1.5"], ("--nu", "--lam")),
+    "geometry-cell": (["geometry", "--volume-fl", "90", "--area-um2", "135", "--diameter-um", "4"],
+                      ("--volume-fl", "--area-um2", "--diameter-um")),
+    "estimate": (["estimate", "--hematocrit", "0.3"],
+                 ("--volume-fl", "--area-um2", "--diameter-um", "--velocity-mm-s",
+                  "--plasma-viscosity-mpas", "--bending-modulus-j", "--hematocrit")),
+    "estimate-nu": (["estimate", "--nu", "0.9", "--lam", "1.25", "--ca-b", "50", "--hematocrit", "0.3"],
+                    ("--nu", "--lam", "--ca-b", "--hematocrit")),
+    "viscosity": (["viscosity", "--diameter-um", "6", "--hematocrit", "0.3"],
+                  ("--diameter-um", "--hematocrit")),
+    "viscosity-tube": (["viscosity", "--diameter-um", "6", "--hematocrit", "0.3",
+                        "--hematocrit-kind", "tube", "--law", "pries2005"],
+                       ("--diameter-um", "--hematocrit")),
+    "viscosity-single-file": (["viscosity", "--diameter-um", "3", "--hematocrit", "0.3",
+                               "--law", "single-file"], ("--diameter-um", "--hematocrit")),
+    "fahraeus-discharge": (["fahraeus", "--diameter-um", "10", "--discharge-hematocrit", "0.45"],
+                           ("--diameter-um", "--discharge-hematocrit")),
+    "fahraeus-tube": (["fahraeus", "--diameter-um", "10", "--tube-hematocrit", "0.45"],
+                      ("--diameter-um", "--tube-hematocrit")),
+}
+BAD_NUMBERS = ("nan", "inf", "-inf", "1e308", "1e200", "1e-320", "1e-300", "0", "-1", "abc", "")
+
+
+def _with_option(argv, option, value):
+    argv = list(argv)
+    if option in argv:
+        i = argv.index(option)
+        del argv[i:i + 2]
+    return argv + [f"{option}={value}"]
+
+
+@pytest.mark.parametrize("value", BAD_NUMBERS)
+@pytest.mark.parametrize("base, option", [(b, o) for b, (_, opts) in NUMERIC_OPTIONS.items()
+                                          for o in opts])
+def test_every_numeric_option_is_refused_by_name_or_gives_finite_numbers(cli, base, option, value):
+    argv = _with_option(NUMERIC_OPTIONS[base][0], option, value)
+    code, out, err = cli(*argv, "--json")
+    assert "Traceback" not in err
+    if code == 2:
+        lines = err.strip("\n").splitlines()
+        assert out == "" and len(lines) == 1, err
+        assert option in lines[0], (option, lines[0])
+    else:
+        assert code == 0, (code, err)
+        strict_json(out)                   # no NaN, no Infinity
+        code, table, _ = cli(*argv)
+        assert code == 0 and "nan" not in table.lower() and "inf " not in table
+
+
+@pytest.mark.parametrize("argv, option, bound", [
+    (["estimate", "--velocity-mm-s", "1e308"], "--velocity-mm-s", "1e+06"),
+    (["estimate", "--velocity-mm-s", "1e-320"], "--velocity-mm-s", "1e-09"),
+    (["estimate", "--plasma-viscosity-mpas", "1e308"], "--plasma-viscosity-mpas", "1e+12"),
+    (["estimate", "--bending-modulus-j", "1e-320"], "--bending-modulus-j", "1e-24"),
+    (["estimate", "--volume-fl", "1e200"], "--volume-fl", "1e+12"),
+    (["geometry", "--volume-fl", "90", "--area-um2", "135", "--diameter-um", "1e-320"],
+     "--diameter-um", "0.001"),
+])
+def test_absurd_physical_inputs_are_refused_naming_the_option_and_bound(cli_usage_error, argv,
+                                                                        option, bound):
+    line = cli_usage_error(*argv)
+    assert line.split("error: ", 1)[1].startswith(option) and bound in line
+
+
+def test_an_inconsistent_default_is_named_as_such(cli_usage_error):
+    """--volume-fl 1e9 with the default area 135 µm² (less than the sphere's): the message
+    names --area-um2 as a default and gives the range for that volume."""
+    line = cli_usage_error("estimate", "--volume-fl", "1e9")
+    R0 = (3e9 / (4 * math.pi)) ** (1 / 3)
+    assert "--area-um2 (default)" in line and f"{4 * math.pi * R0**2:.6g}" in line
+
+
+def test_huge_confinement_gives_the_asymptote_of_nu_c(cli):
+    """nu_c = (3 lam^2/(1 + 2 lam^3))^(3/2) -> (3/2)^(3/2) lam^(-3/2) (relative error 3/(4 lam^3)),
+    where the printed form overflows to NaN (lam > ~1e103)."""
+    for lam in (1e104, 1e200):
+        code, out, err = cli("geometry", "--nu", "0.6", "--lam", repr(lam), "--json")
+        assert code == 0, err
+        obj = strict_json(out)
+        assert obj["passes"] is False and obj["delta"] is None
+        assert obj["nu_c"] == pytest.approx(1.5**1.5 * lam**-1.5, rel=1e-14)
+
+
+def test_huge_velocity_no_longer_gives_infinite_ca_b(cli):
+    code, out, _ = cli("estimate", "--velocity-mm-s", "1e6", "--json")
+    obj = strict_json(out)
+    R0 = (3.0 * 90.0 / (4.0 * math.pi)) ** (1.0 / 3.0) * 1e-6
+    assert code == 0 and obj["ca_b"] == pytest.approx(1.2e-3 * 1e3 * R0**2 / 2e-19, rel=1e-12)
+
+
+# ------------------------------------------------------------------------------------------
+# Fåhræus below x = 1: an error or a flagged missing value, never H_T > H_D.
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("argv", [
+    ["fahraeus", "--diameter-um", "2", "--discharge-hematocrit", "0.45"],
+    ["fahraeus", "--diameter-um", "3.0", "--tube-hematocrit", "0.45"],
+    ["viscosity", "--diameter-um", "2", "--hematocrit", "0.45", "--hematocrit-kind", "tube"],
+])
+def test_fahraeus_below_its_meaningful_diameter_is_an_error(cli_usage_error, argv):
+    line = cli_usage_error(*argv)
+    assert "--diameter-um" in line and "3.063" in line and "H_T" in line
+
+
+def test_fahraeus_near_its_singular_point_keeps_HT_below_HD(cli):
+    d_star = math.log(1.7 / 0.6) / (0.35 - 0.01)        # x = 1 for the pries1992 constants
+    for d in (d_star * (1 + 1e-12), d_star * (1 + 1e-6), 3.2):
+        code, out, _ = cli("fahraeus", "--diameter-um", repr(d), "--discharge-hematocrit", "0.45",
+                           "--json")
+        obj = strict_json(out)
+        assert code == 0 and obj["tube_hematocrit"] <= 0.45 and obj["ratio_HT_over_HD"] <= 1.0
+        assert obj["ratio_HT_over_HD"] == pytest.approx(ref_fahraeus_tube(d, 0.45, 0.35, 0.01) / 0.45,
+                                                        rel=1e-12)
+        code, out, _ = cli("fahraeus", "--diameter-um", repr(d), "--tube-hematocrit", "0.45",
+                           "--json")
+        back = strict_json(out)
+        assert code == 0 and back["discharge_hematocrit"] >= 0.45
+        assert ref_fahraeus_tube(d, back["discharge_hematocrit"], 0.35, 0.01) == pytest.approx(0.45, rel=1e-12)
+
+
+def test_viscosity_in_a_2um_tube_reports_no_tube_hematocrit(cli):
+    code, out, _ = cli("viscosity", "--diameter-um", "2", "--hematocrit", "0.45", "--json")
+    obj = strict_json(out)
+    assert code == 0 and obj["tube_hematocrit"] is None
+    assert any("H_T > H_D" in w for w in obj["warnings"])
+    assert obj["eta_rel"] == pytest.approx(relative_viscosity(2.0, 0.45), rel=1e-12)
+
+
+def test_estimate_just_above_d_c_keeps_HT_below_HD(cli):
+    """2.9 µm: below the Fåhræus fit's x = 1, the single-file flux H_T = H_D/(V/U) answers."""
+    code, out, _ = cli("estimate", "--diameter-um", "2.9", "--hematocrit", "0.45",
+                       "--hematocrit-kind", "discharge", "--json")
+    obj = strict_json(out)
+    assert code == 0 and obj["tube_hematocrit"] == pytest.approx(0.45 / obj["V_over_U"], rel=1e-12)
+    assert obj["tube_hematocrit"] < 0.45 and obj["methods"]["tube_hematocrit"]["method"] == "single_file_flux"
+
+
+# ------------------------------------------------------------------------------------------
+# Single-file viscosity: its diameter range comes from the stored validity range.
+# ------------------------------------------------------------------------------------------
+
+def test_single_file_range_is_the_stored_validity_range(cli, monkeypatch):
+    from correlations import viscosity
+    from lubrication.checks import ValidityRange
+    argv = ("viscosity", "--diameter-um", "3", "--hematocrit", "0.3", "--law", "single-file", "--json")
+    _, out, _ = cli(*argv)
+    obj = strict_json(out)
+    assert obj["valid"] is True and "8" in obj["validity"]
+    monkeypatch.setattr(viscosity, "CHEN2020_RANGE",
+                        ValidityRange.of("narrowed for the test", diameter_um=(0.0, 2.95)))
+    code, out, err = cli(*argv)
+    obj = strict_json(out)
+    assert code == 0 and obj["valid"] is False and "narrowed for the test" in obj["validity"]
+    assert "extrapolated" in err
+
+
+# ------------------------------------------------------------------------------------------
+# The Ca_B an estimate used is stated.
+# ------------------------------------------------------------------------------------------
+
+def test_dimensionless_estimate_states_the_ca_b_it_used(cli):
+    _, out, _ = cli("estimate", "--nu", "0.9", "--lam", "1.25", "--json")
+    obj = strict_json(out)
+    assert obj["ca_b"] is None and "not given" in obj["methods"]["ca_b"]["note"]
+    assert "10 <= Ca_B <= 1e4" in obj["methods"]["ca_b"]["note"]
+    _, table, _ = cli("estimate", "--nu", "0.9", "--lam", "1.25")
+    assert "Ca_B" in table and "not given" in table
+    _, out, _ = cli("estimate", "--nu", "0.9", "--lam", "1.25", "--ca-b", "30", "--json")
+    obj = strict_json(out)
+    assert obj["ca_b"] == 30.0 and obj["methods"]["ca_b"]["method"] == "input"

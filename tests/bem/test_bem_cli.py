@@ -25,8 +25,9 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_sphere_table(cli):
     code, out, err = cli("bem", "sphere", "--lam", "0.5")
     assert code == 0, err
-    assert "{" not in out and "speed V/U" in out and "dp+ R/(eta U)" in out
-    assert "1.68" in out
+    assert "{" not in out and "speed V" in out and "eta U/R" in out
+    row = next(line for line in out.splitlines() if line.startswith("speed V"))
+    assert "1.68" in row and " U " in row
 
 
 def test_sphere_json(cli):
@@ -79,7 +80,7 @@ def test_drop_table(cli):
     code, out, err = cli("bem", "drop", "--lam", "0.3", "--ca", "0.1", "--modes", "8",
                          "--tol", "1e-3")
     assert code == 0, err
-    assert "{" not in out and "speed V/U" in out and "1/R" in out and "converged" in out
+    assert "{" not in out and "speed V" in out and "1/R" in out and "converged" in out
 
 
 def test_not_converged_exits_1_with_the_json(cli):
@@ -96,15 +97,16 @@ def test_not_converged_exits_1_with_the_json(cli):
     (["bem", "sphere", "--lam", "nan"], ("lam", "nan")),
     (["bem", "drop", "--lam", "1.2", "--ca", "0.1"], ("lam", "1.2", "< 1")),
     (["bem", "drop", "--lam", "-0.5", "--ca", "0.1"], ("lam", "-0.5")),
-    (["bem", "drop", "--lam", "0.8", "--ca", "0"], ("ca", "0", "ca > 0")),
+    (["bem", "drop", "--lam", "0.8", "--ca", "0"], ("--ca", "0", "ca > 0")),
     (["bem", "drop", "--lam", "0.8", "--ca", "-1"], ("ca", "-1")),
     (["bem", "drop", "--lam", "nan", "--ca", "0.1"], ("lam", "nan")),
     (["bem", "drop", "--lam", "0.8", "--ca", "inf"], ("ca", "inf")),
     (["bem", "drop", "--lam", "0.8"], ("--ca",)),
     (["bem", "drop", "--lam", "abc", "--ca", "0.1"], ("--lam", "abc")),
-    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--max-modes", "4"], ("max_modes", "4")),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--max-modes", "4"],
+     ("--max-modes", "max_modes", "4")),
     (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--residual-tol", "0"],
-     ("residual_tol", "0")),
+     ("--residual-tol", "residual_tol", "0")),
     (["bem"], ("bem_command",)),
 ])
 def test_invalid_input_exits_2_with_one_line(cli_usage_error, argv, needles):
@@ -142,3 +144,85 @@ def test_plot_shape_labels_axes():
     ax = plot_shape(solve_sphere(0.5, panels=4))
     assert ax.get_xlabel() == "x/R [-]" and ax.get_ylabel() == "r/R [-]"
     assert "λ = 0.5" in ax.get_title()
+
+
+# ------------------------------------------------------------------ every input answered
+@pytest.mark.parametrize("argv, needles", [
+    (["bem", "sphere", "--lam", "1e-300"], ("--lam", "16 lam^6", "small-sphere limit")),
+    (["bem", "sphere", "--lam", "0.01"], ("--lam", "0.019", "1.999866667")),
+    (["bem", "sphere", "--lam", "0.999"], ("--lam", "0.996", "1 + 4 eps/3")),
+    (["bem", "sphere", "--lam", "0.5", "--panels", "100"], ("--panels", "100", "4000")),
+    (["bem", "sphere", "--lam", "0.5", "--panels", "1e308"], ("--panels", "1e308")),
+    (["bem", "sphere", "--lam", "inf"], ("--lam", "inf")),
+    (["bem", "sphere", "--lam", "0.5", "--tol", "0"], ("--tol", "0")),
+    (["bem", "sphere", "--lam", "0.5", "--max-time", "nan"], ("--max-time", "nan")),
+    (["bem", "drop", "--lam", "0.5", "--ca", "1e-300"], ("--ca", "1e-08")),
+    (["bem", "drop", "--lam", "0.5", "--ca", "1e308"], ("--ca", "100")),
+    (["bem", "drop", "--lam", "1e-320", "--ca", "0.1"], ("--lam", "0.8 lam^2")),
+    (["bem", "drop", "--lam", "0.5", "--ca", "0.1", "--modes", "1000000000000000000000"],
+     ("--modes", "64")),
+    (["bem", "drop", "--lam", "0.5", "--ca", "0.1", "--modes", "0"], ("--modes", "0")),
+    (["bem", "drop", "--lam", "0.5", "--ca", "0.1", "--max-time", "0"], ("--max-time", "0")),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--ca-b", "1e308"], ("--ca-b", "100000")),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--ca-b", "1e-320"], ("--ca-b",)),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--modes", "-3"], ("--modes", "-3")),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--max-modes", "1e308"],
+     ("--max-modes", "1e308")),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--max-modes", "500"],
+     ("--max-modes", "96")),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--tol", "nan"], ("--tol", "nan")),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--residual-tol", "-inf"],
+     ("--residual-tol",)),
+    (["bem", "vesicle", "--nu", "nan", "--lam", "1.0"], ("--nu", "nan")),
+    (["bem", "vesicle-sweep", "--nu", "0.9", "--lam", "0.5", "1.0", "1e6"], ("--lam", "100")),
+    (["bem", "vesicle-sweep", "--nu", "0.9", "--lam", "0.5", "1.0", "3", "--ca-b", "0"],
+     ("--ca-b",)),
+])
+def test_bad_numbers_exit_2_naming_the_option_before_numba(cli_usage_error, argv, needles):
+    t0 = time.perf_counter()
+    line = cli_usage_error(*argv)
+    assert time.perf_counter() - t0 < 1.0
+    for n in needles:
+        assert n in line, (n, line)
+
+
+def test_input_checks_do_not_load_numba():
+    """The checks of every bem command run before numba is imported."""
+    code = ("import sys\nfrom correlations.cli import main\n"
+            "for argv in (['bem','sphere','--lam','1e-300'], ['bem','drop','--lam','0.5','--ca',"
+            "'1e-300'], ['bem','vesicle','--nu','0.9','--lam','1','--ca-b','1e308'],"
+            " ['bem','vesicle-sweep','--nu','0.9','--lam','0.5','1','1e6']):\n"
+            "    assert main(argv) == 2, argv\n"
+            "print('numba' in sys.modules)")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                          timeout=60, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "False"
+
+
+def test_failed_drop_prints_and_saves_no_numbers(cli, tmp_path):
+    """A spent time budget (exit 1): "—" in the table, null in the JSON and the saved file."""
+    code, out, err = cli("bem", "drop", "--lam", "0.3", "--ca", "0.1", "--modes", "8",
+                         "--max-time", "1e-9", "--out", str(tmp_path))
+    assert code == 1, err
+    assert "time limit" in err and "nan" not in out
+    row = next(line for line in out.splitlines() if line.startswith("speed V"))
+    assert "—" in row
+    saved = json.loads(next(tmp_path.glob("*.json")).read_text())
+    assert saved["converged"] is False and saved["V_over_U"] is None
+    assert saved["dp_plus_R0"] is None and saved["length"] is None
+    assert next(tmp_path.glob("*.csv")).read_text().count("\n") == 1      # header only
+
+
+def test_vesicle_sweep_table_has_one_labelled_row_per_point():
+    from bem.cli import _sweep_text
+    table = [{"lam": 0.5, "lam_ratio": 0.4, "V_over_U": 1.8, "dp_plus_R0": 0.3, "film_min": 0.4,
+              "ell": 1.1, "shape_class": "bullet", "runtime": 3.0, "converged": True,
+              "message": "converged"},
+             {"lam": 0.6, "lam_ratio": 0.5, "V_over_U": None, "dp_plus_R0": None,
+              "film_min": None, "ell": None, "shape_class": None, "runtime": 2.0,
+              "converged": False, "message": "residual too large"}]
+    text = _sweep_text(table, "title")
+    lines = text.splitlines()
+    assert "V/U" in lines[1] and "dp+ R0/(eta U)" in lines[1]
+    assert "1.8" in lines[3] and "—" in lines[4] and "NOT CONVERGED" in lines[-1]

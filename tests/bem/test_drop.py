@@ -322,3 +322,22 @@ def test_a_drop_without_steady_shape_is_reported():
     assert not res.success
     assert "no steady shape" in res.message
     assert math.isnan(res.V_over_U)
+
+
+# ------------------------------------------------------------------ resource envelope
+@pytest.mark.parametrize("kwargs, needle", [
+    ({"lam": 0.5, "ca": 1e-300}, "ca="), ({"lam": 0.5, "ca": 1e308}, "ca="),
+    ({"lam": 1e-320, "ca": 0.1}, "lam="), ({"lam": 0.5, "ca": 0.1, "n_modes": 10**21}, "n_modes="),
+    ({"lam": 0.5, "ca": 0.1, "max_modes": 500}, "max_modes="),
+    ({"lam": 0.5, "ca": 0.1, "max_time": math.nan}, "max_time="),
+])
+def test_requests_outside_the_envelope_are_refused_up_front(kwargs, needle):
+    with pytest.raises(InvalidParameterError, match=needle):
+        solve_drop(**kwargs)
+
+
+def test_spent_time_budget_is_an_unconverged_result_without_numbers():
+    res = solve_drop(0.3, 0.1, n_modes=8, max_time=1e-9)
+    assert not res.success and "time limit" in res.message
+    d = res.to_dict()
+    assert d["V_over_U"] is None and d["dp_plus_R"] is None and d["shape"] is None

@@ -213,3 +213,19 @@ def test_result_is_frozen_serialisable_and_saved_atomically(tmp_path):
     path = res.save(tmp_path)
     assert json.loads(path.read_text())["V_over_U"] == res.V_over_U
     assert [p.name for p in tmp_path.iterdir()] == [path.name]       # no temporary left
+
+
+# ------------------------------------------------------------------ resource envelope
+@pytest.mark.parametrize("kwargs, needle", [
+    ({"lam": 1e-300}, "small-sphere limit"), ({"lam": 0.01}, "0.019"),
+    ({"lam": 0.999}, "1 + 4 eps/3"), ({"lam": 0.5, "panels": 100}, "panels=100"),
+    ({"lam": 0.5, "max_time": -1.0}, "max_time"), ({"lam": 0.5, "panels": 4.5}, "panels"),
+])
+def test_requests_outside_the_envelope_are_refused_up_front(kwargs, needle):
+    with pytest.raises(InvalidParameterError, match=needle.replace("+", r"\+")):
+        solve_sphere(**kwargs)
+
+
+def test_small_sphere_with_a_loose_tolerance_is_solved():
+    res = solve_sphere(0.02, panels=4, tol=1e-6)
+    assert res.V_over_U == pytest.approx(2 - 4 / 3 * 0.02**2, abs=1e-8)

@@ -38,6 +38,12 @@ REF_09_10 = {"V_over_U": 1.2574636, "dp_plus_R0": 13.716092}
     ({"nu": 0.9, "lam": 1.0, "ca_b": 0.0}, InvalidParameterError),
     ({"nu": 0.9, "lam": 1.0, "ca_b": math.inf}, InvalidParameterError),
     ({"nu": 0.9, "lam": 1.0, "n_modes": 3}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "n_modes": 10**21}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "max_modes": 97}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "ca_b": 1e308}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "ca_b": 1e-300}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "tol": math.nan}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "max_time": 0.0}, InvalidParameterError),
     ({"nu": 0.9, "lam": 1.0, "initial": "sphere"}, InvalidParameterError),
     ({"nu": 0.9, "lam": 1.0, "density": "gap"}, InvalidParameterError),
 ])
@@ -250,7 +256,11 @@ def test_cli_reports_an_unconverged_run_with_exit_1(capsys, tmp_path):
     for key in ("nu", "lam", "lam_c", "V_over_U", "dp_plus_R0", "ell", "film_min",
                 "tension_max", "shape_class", "converged", "volume_error", "area_error"):
         assert key in obj, key
+    for key in ("V_over_U", "dp_plus_R0", "ell", "film_min", "tension_max", "shape_class"):
+        assert obj[key] is None, key                      # no numbers from a failed solve
     assert len(list(tmp_path.glob("*.json"))) == 1 and len(list(tmp_path.glob("*.csv"))) == 1
+    saved = json.loads(next(tmp_path.glob("*.json")).read_text())
+    assert saved["V_over_U"] is None and saved["converged"] is False
 
 
 @pytest.mark.slow          # ~35 s

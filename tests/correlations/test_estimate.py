@@ -720,3 +720,149 @@ def test_estimate_cli_solver_bem(fake_bem, capsys):
     registry._bem_result.cache_clear()
     code = main(["estimate", "--nu", str(nu), "--lam", repr(lam), "--solver", "bem", "--json"])
     assert code == 1 and json.loads(capsys.readouterr().out)["converged"] is False
+
+
+# ------------------------------------------------------------------------------------------
+# A failed, crashed or absurd solver run gives no number from that solver.
+# ------------------------------------------------------------------------------------------
+
+class FakeLubrication:
+    """Stand-in for lubrication.solve.solve_lubrication: raises, fails or returns ``values``."""
+
+    def __init__(self, raises=None, success=True, **values):
+        self.raises, self.success, self.calls = raises, success, 0
+        self.values = {"V_over_U": 1.0321, "dp_plus_R0": 321.0, "ell": 4.321, "film_min": 0.0321,
+                       "tension_front": 3.21, "shape_class": "bullet", **values}
+
+    def __call__(self, nu, lam, *, ca_b):
+        from types import SimpleNamespace
+        self.calls += 1
+        if self.raises is not None:
+            raise self.raises
+        return SimpleNamespace(success=self.success, message="fake: stopped at max_time",
+                               **self.values)
+
+
+@pytest.fixture
+def fake_lubrication(monkeypatch):
+    import lubrication.solve
+    from correlations import registry
+
+    def install(**kw):
+        solver = FakeLubrication(**kw)
+        registry._lubrication_solution.cache_clear()
+        monkeypatch.setattr(lubrication.solve, "solve_lubrication", solver)
+        return solver
+    yield install
+    registry._lubrication_solution.cache_clear()
+
+
+@pytest.mark.parametrize("kw, reason", [
+    ({"success": False}, "did not converge"),                          # also: a time limit hit
+    ({"raises": np.linalg.LinAlgError("singular matrix")}, "singular matrix"),
+    ({"raises": FloatingPointError("overflow")}, "overflow"),
+    ({"raises": InvalidParameterError("lam", 1.0, "lam < 0.9")}, "lam < 0.9"),
+    ({"V_over_U": math.nan}, "finite"),
+    ({"V_over_U": 0.5}, "V_over_U = 0.5 outside 1 <= V_over_U <= 2"),   # output check
+    ({"dp_plus_R0": -3.0}, "dp+ >= 0"),
+])
+def test_a_failed_solver_gives_no_number_and_the_closed_forms_answer(fake_lubrication, kw, reason):
+    solver = fake_lubrication(**kw)
+    nu, lam = _near_critical()
+    e = estimate_dimensionless(nu, lam, solvers=("lubrication",))
+    assert solver.calls == 1                            # the failure is cached, not retried
+    assert e.converged is False
+    d = e.to_dict()
+    assert d["converged"] is False and reason in d["message"]
+    assert not any(q.method == "lubrication_solver" for q in e.quantities.values())
+    assert e.quantities["V_over_U"].method == "near_critical_barakat2018a"
+    assert e["V_over_U"] == pytest.approx(ref_speed_asmyp1(nu, lam), rel=1e-12)
+    json.dumps(d, allow_nan=False)
+
+
+def test_where_only_the_failed_solver_applies_the_value_is_missing_with_the_reason(fake_lubrication):
+    fake_lubrication(raises=RuntimeError("diverged"))
+    e = estimate_dimensionless(0.9, 0.8 * ref_lam_c(0.9), solvers=("lubrication",))   # delta 0.2
+    q = e.quantities["V_over_U"]
+    assert q.value is None and q.method is None and "diverged" in q.note
+
+
+def test_a_successful_solver_states_the_ca_b_it_assumed(fake_lubrication):
+    fake_lubrication()
+    e = estimate_dimensionless(*_near_critical(), solvers=("lubrication",))
+    assert e["V_over_U"] == 1.0321 and e.converged
+    q = e.quantities["ca_b"]
+    assert q.value == 50.0 and "assumed" in q.method and "lubrication" in q.method
+
+
+def test_the_cli_exits_1_with_the_fallback_numbers_named(fake_lubrication, capsys):
+    from correlations.cli import main
+    fake_lubrication(success=False)
+    nu, lam = _near_critical()
+    code = main(["estimate", "--nu", str(nu), "--lam", repr(lam), "--solver", "lubrication", "--json"])
+    captured = capsys.readouterr()
+    obj = json.loads(captured.out)
+    assert code == 1 and obj["converged"] is False
+    assert obj["methods"]["V_over_U"]["method"] == "near_critical_barakat2018a"
+    assert "not converged" in captured.err and "lubrication" in captured.err
+
+
+# ------------------------------------------------------------------------------------------
+# Physical bounds of the inputs, tiny confinements, scalar inputs.
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["volume_fl", "diameter_um", "velocity_mm_s",
+                                  "plasma_viscosity_mpas", "bending_modulus_j"])
+def test_physical_inputs_outside_their_bounds_name_the_parameter(name):
+    from correlations.estimate import PHYSICAL_BOUNDS
+    lo, hi, _ = PHYSICAL_BOUNDS[name]
+    for value in (lo / 10, hi * 10, 1e308, 1e-320):
+        with pytest.raises(InvalidParameterError) as info:
+            estimate(**{name: value})
+        assert info.value.name == name and f"{lo:g}" in str(info.value)
+
+
+def test_every_corner_of_the_physical_box_gives_finite_numbers():
+    """Inside PHYSICAL_BOUNDS no derived number overflows (Ca_B, pressures, tensions)."""
+    import itertools
+    from correlations.estimate import PHYSICAL_BOUNDS
+    names = ("velocity_mm_s", "plasma_viscosity_mpas", "bending_modulus_j")
+    for volume, (u, eta, kappa) in itertools.product(
+            PHYSICAL_BOUNDS["volume_fl"][:2], itertools.product(*(PHYSICAL_BOUNDS[n][:2] for n in names))):
+        area = (6.0 * math.sqrt(math.pi) * volume / 0.9) ** (2.0 / 3.0)
+        d = 1.03 * 2.0 * ref_R0(volume) / ref_lam_c(0.9)         # near-critical: every number
+        e = estimate(volume, area, d, u, eta, kappa, hematocrit=0.3, extrapolate=True)
+        d_ = e.to_dict()
+        json.dumps(d_, allow_nan=False)
+        assert d_["ca_b"] > 0 and d_["dp_plus_Pa"] > 0 and d_["tension_front_mN_m"] > 0
+
+
+@pytest.mark.parametrize("lam", [1e-320, 1e-200, 1e-80, 1e-3])
+def test_tiny_confinement_gives_the_small_sphere_limits(lam):
+    e = estimate_dimensionless(0.95, lam, tube_hematocrit=0.3)
+    d = e.to_dict()
+    json.dumps(d, allow_nan=False)
+    assert d["V_over_U"] == pytest.approx(2.0 - 4.0 / 3.0 * lam**2, rel=1e-15)
+    assert d["dp_plus_R"] == pytest.approx(16.0 * lam**5, rel=1e-12, abs=1e-300)
+    # eta_rel - 1 = (3/32) lam^-4 16 lam^6 H_T = 1.5 lam^2 H_T
+    assert d["eta_rel"] - 1.0 == pytest.approx(1.5 * lam**2 * 0.3, rel=1e-9, abs=1e-15)
+
+
+@pytest.mark.parametrize("kw", [{"nu": [0.9, 0.8]}, {"lam": np.array([1.0, 1.1])},
+                                {"ca_b": [50.0]}, {"tube_hematocrit": [0.3, 0.4]}])
+def test_the_dimensionless_estimate_takes_one_case(kw):
+    args = {"nu": 0.9, "lam": 1.2, **kw}
+    with pytest.raises(InvalidParameterError) as info:
+        estimate_dimensionless(**args)
+    assert info.value.name == next(iter(kw)) and "single number" in str(info.value)
+
+
+def test_output_checks_reject_unphysical_values():
+    from correlations.registry import check_output
+    assert check_output("V_over_U", 1.5, {}) == ""
+    assert "outside" in check_output("V_over_U", 2.5, {})
+    assert "finite" in check_output("dp_plus_R0", math.inf, {})
+    assert "eta_rel >= 1" in check_output("eta_rel", 0.99, {})
+    assert "impossible" in check_output("tube_hematocrit", 0.5, {"discharge_hematocrit": 0.4})
+    assert "impossible" in check_output("discharge_hematocrit", 0.4, {"tube_hematocrit": 0.5})
+    assert check_output("shape_class", "bullet", {}) == ""

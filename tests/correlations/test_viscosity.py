@@ -268,9 +268,10 @@ def _x_equals_one_diameter(constants):
 def test_fahraeus_round_trip_including_x_equal_one(constants):
     d_one = _x_equals_one_diameter(constants)
     assert 2.5 < d_one < 3.1   # physics notes: x = 1 at D ~ 2.6-3.1 µm
-    # x = 1 at d_one, and x == 1.0 exactly in floating point for D >= ~1e4 (both are outside the
-    # fitted range, hence the warnings); the grid straddles d_one closely.
-    special = d_one + np.array([0.0, 1e-12, -1e-12, 1e-8, -1e-8, 1e-4, -1e-4])
+    # x = 1 at d_one (the lower end of the domain: below it H_T > H_D), and x == 1.0 exactly in
+    # floating point for D >= ~1e4 (both outside the fitted range, hence the warnings); the grid
+    # approaches d_one closely from above.
+    special = d_one + np.array([1e-12, 1e-8, 1e-4])
     d = np.concatenate([special, np.geomspace(3.3, 1978.0, 60), [1e4, 1e6]])[:, None]
     hd = np.array([0.0, 1e-6, 0.01, 0.2, 0.45, 0.7, 0.9, 0.99])
     with pytest.warns(OutOfRangeWarning):
@@ -279,6 +280,36 @@ def test_fahraeus_round_trip_including_x_equal_one(constants):
         back = discharge_hematocrit_fahraeus(d, ht, constants)
     np.testing.assert_allclose(back, np.broadcast_to(hd, back.shape), rtol=1e-12, atol=0)
     assert np.all(np.isfinite(back))
+
+
+@pytest.mark.parametrize("constants", sorted(FAHRAEUS_CONSTANTS))
+def test_fahraeus_refuses_diameters_where_the_fit_gives_HT_above_HD(constants):
+    """Below x = 1 (D* = ln(1.7/0.6)/(a - b), found here by root finding) the fit would give
+    H_T > H_D, impossible in single file (H_T/H_D = U/V <= 1): an error naming the diameter and
+    the bound, for the forward, inverse and ratio functions, arrays included."""
+    d_one = _x_equals_one_diameter(constants)
+    assert v.FAHRAEUS_MIN_DIAMETER_UM[constants] == pytest.approx(d_one, rel=1e-13)
+    a, b = FAHRAEUS_CONSTANTS[constants]
+    assert ref_x(d_one * (1 - 1e-6), a, b) > 1.0          # the reason for the bound
+    for f in (tube_hematocrit_fahraeus, discharge_hematocrit_fahraeus,
+              v.hematocrit_ratio_fahraeus):
+        for d in (v.FAHRAEUS_MIN_DIAMETER_UM[constants], d_one * (1 - 1e-9), 2.0, 1e-300,
+                  np.array([10.0, 2.0])):
+            with pytest.raises(InvalidParameterError, match="diameter_um") as info:
+                f(d, 0.45, constants)
+            assert f"{d_one:.4g}" in str(info.value) and "H_T" in str(info.value)
+
+
+@given(D=st.floats(3.07, 1e6), HD=st.floats(0.0, 0.9), constants=st.sampled_from(sorted(FAHRAEUS_CONSTANTS)))
+def test_fahraeus_tube_hematocrit_never_exceeds_discharge(D, HD, constants):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutOfRangeWarning)
+        ht = tube_hematocrit_fahraeus(D, HD, constants)
+        ratio = v.hematocrit_ratio_fahraeus(D, HD, constants)
+        back = discharge_hematocrit_fahraeus(D, HD, constants)
+    a, b = FAHRAEUS_CONSTANTS[constants]
+    assert ht <= HD and 0.0 < ratio <= 1.0 and back >= HD
+    assert ratio == pytest.approx(HD + (1.0 - HD) * ref_x(D, a, b), rel=1e-14)
 
 
 @pytest.mark.parametrize("constants", sorted(FAHRAEUS_CONSTANTS))

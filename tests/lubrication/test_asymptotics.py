@@ -337,3 +337,44 @@ def test_plot_draws_on_a_given_axes():
     assert len(ax.get_lines()) == 4
     with pytest.raises(InvalidParameterError, match="nu"):
         plot_speed_asymptotics(nu=(1.2,))
+
+
+# ------------------------------------------------------------------------------------------
+# Every public law: bad input (scalar or inside an array) raises naming the parameter; extreme
+# valid input gives finite numbers.
+# ------------------------------------------------------------------------------------------
+
+_BAD = [math.nan, math.inf, -math.inf, 0.0, -1.0, 1e308, "abc"]
+_LAWS_OF_LAM = [a.speed_small_sphere, a.dp_plus_small_sphere, a.speed_small_drop,
+                a.dp_plus_small_drop]
+_LAWS_OF_NU_LAM = [a.speed_near_critical, a.dp_plus_near_critical]
+
+
+@pytest.mark.parametrize("bad", _BAD)
+@pytest.mark.parametrize("law", _LAWS_OF_LAM, ids=lambda f: f.__name__)
+def test_small_object_laws_name_a_bad_lam(law, bad):
+    for lam in (bad, [0.3, bad]):
+        with pytest.raises(InvalidParameterError) as info:
+            law(lam)
+        assert info.value.name == "lam"
+
+
+@pytest.mark.parametrize("bad", _BAD)
+@pytest.mark.parametrize("law", _LAWS_OF_NU_LAM, ids=lambda f: f.__name__)
+def test_near_critical_laws_name_the_bad_parameter(law, bad):
+    for name, args in (("nu", (bad, 1.0)), ("lam", (0.9, bad)), ("nu", ([0.9, bad], 1.0)),
+                       ("lam", (0.9, [1.0, bad]))):
+        with pytest.raises(InvalidParameterError) as info:
+            law(*args)
+        assert info.value.name == name
+
+
+@pytest.mark.filterwarnings("ignore::lubrication.checks.OutOfRangeWarning")
+def test_extreme_valid_inputs_give_finite_numbers():
+    tiny = np.array([1e-320, 1e-300, 1e-100])
+    assert np.all(a.speed_small_sphere(tiny) == 2.0)
+    assert np.all(a.dp_plus_small_sphere(tiny) == 16.0 * tiny**6)      # underflows to 0
+    lam_c = critical_confinement(1e-6)
+    for nu, lam in ((1e-6, lam_c * (1 - 1e-15)), (0.6, np.nextafter(critical_confinement(0.6), 0))):
+        v, dp = a.speed_near_critical(nu, lam), a.dp_plus_near_critical(nu, lam)
+        assert math.isfinite(v) and 1.0 <= v <= 1.0 + 1e-12 and math.isfinite(dp) and dp > 0

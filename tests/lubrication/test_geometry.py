@@ -131,3 +131,65 @@ def test_physical_units_are_consistent(volume, excess, diameter):
     assert g.critical_length_um(nu, R0) == pytest.approx(g.critical_length(nu) * d_c / 2, rel=1e-13)
     lam = g.confinement_from_diameter(R0, diameter)
     assert (lam < g.critical_confinement(nu)) == (diameter > d_c)
+
+
+# ------------------------------------------------------------------------------------------
+# Huge and tiny inputs: finite, accurate results or an error naming the parameter.
+# ------------------------------------------------------------------------------------------
+
+def _ref_nu_c(lam: float) -> float:
+    """(3 lam^2/(1 + 2 lam^3))^(3/2) in 60-digit decimal arithmetic (no overflow)."""
+    from decimal import Decimal, getcontext
+    getcontext().prec = 60
+    x = Decimal(repr(lam))
+    return float((3 * x * x / (1 + 2 * x**3)) ** Decimal("1.5"))
+
+
+@pytest.mark.parametrize("lam", [1.0, 1.5, 7.0, 1e3, 1e50, 1e102, 1e104, 1e150, 1e200])
+def test_critical_reduced_volume_is_finite_and_accurate_for_huge_lam(lam):
+    assert g.critical_reduced_volume(lam) == pytest.approx(_ref_nu_c(lam), rel=1e-14)
+    if lam >= 1e3:     # the asymptote (3/2)^(3/2) lam^(-3/2), relative error 3/(4 lam^3)
+        assert g.critical_reduced_volume(lam) == pytest.approx(1.5**1.5 * lam**-1.5, rel=1e-8)
+
+
+def test_critical_reduced_volume_beyond_the_double_range_underflows_to_zero():
+    out = g.critical_reduced_volume(np.array([1e250, 1e308]))
+    assert np.all(np.isfinite(out)) and np.all(out >= 0) and np.all(out < 1e-300)
+
+
+@pytest.mark.parametrize("volume, area", [(1e300, 1e201), (1e-300, 1e-199), (1e-6, 1e-3)])
+def test_reduced_volume_of_extreme_but_consistent_pairs(volume, area):
+    """nu = 6 sqrt(pi) V A^(-3/2), computed here in logarithms."""
+    ref = math.exp(math.log(6.0 * math.sqrt(math.pi)) + math.log(volume) - 1.5 * math.log(area))
+    assert g.reduced_volume(volume, area) == pytest.approx(ref, rel=1e-13)
+
+
+@pytest.mark.parametrize("volume, area", [(1e308, 135.0), (90.0, 1e308), (1e-320, 135.0),
+                                          (90.0, 1e-320), (90.0, 1e6)])
+def test_cell_outside_the_reduced_volume_range_names_the_area(volume, area):
+    with pytest.raises(InvalidParameterError) as info:
+        g.cell_from_volume_area(volume, area)
+    assert info.value.name == "area_um2"
+    assert "inf" not in str(info.value) and "nan" not in str(info.value)
+    sphere = (36.0 * math.pi) ** (1 / 3) * volume ** (2 / 3)
+    assert f"{sphere:.6g}" in str(info.value)
+
+
+def test_volume_radius_of_the_largest_double():
+    # 1e308 = 1e8 * 1e300, so R0 = (3e8/(4 pi))^(1/3) 1e100
+    assert g.volume_radius(1e308) == pytest.approx((3e8 / (4 * math.pi)) ** (1 / 3) * 1e100,
+                                                   rel=1e-14)
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda: g.confinement_from_diameter(2.78, 1e-320), "diameter_um"),
+    (lambda: g.confinement_from_diameter(1e-300, 1e308), "diameter_um"),
+    (lambda: g.critical_diameter_um(0.6, 1e308), "R0_um"),
+    (lambda: g.critical_length_um(0.6, [1.0, 1e308]), "R0_um"),
+    (lambda: g.critical_reduced_volume([2.0, math.nan]), "lam"),
+    (lambda: g.critical_confinement([0.5, 1e-320]), "nu"),
+])
+def test_overflowing_results_raise_naming_the_parameter(call, name):
+    with pytest.raises(InvalidParameterError) as info:
+        call()
+    assert info.value.name == name

@@ -16,6 +16,7 @@ Timings are measured by the benchmark script, never asserted here.
 
 import json
 import math
+import time
 
 import numpy as np
 import pytest
@@ -203,7 +204,7 @@ def test_to_dict_and_atomic_save(high_ca, tmp_path):
     for key in ("nu", "lam", "lam_c", "V_over_U", "dp_plus_R0", "dp_plus_R", "ell", "film_min",
                 "tension_max", "shape_class", "converged"):
         assert key in d
-    assert d["ca_b"] == "inf" and d["converged"] is True
+    assert d["ca_b"] is None and d["model"] == "high-Ca" and d["converged"] is True
     json.dumps(d, allow_nan=False)
     json_path, csv_path = high_ca.save(tmp_path)
     assert json.loads(json_path.read_text())["V_over_U"] == pytest.approx(high_ca.V_over_U)
@@ -295,10 +296,19 @@ def test_sweep_down_to_half_critical_with_bending():
 
 
 @pytest.mark.slow
-def test_end_of_the_high_ca_branch_is_reported():
-    """nu = 0.6 high-Ca: the rear flattens near lam/lam_c = 0.915 and the branch ends there."""
+def test_end_of_the_high_ca_branch_is_where_the_table_says(monkeypatch):
+    """nu = 0.6 high-Ca: the rear flattens and the branch ends at the tabulated lam/lam_c
+    (0.9081): just above it the solve converges; below it, with the up-front check disabled,
+    the continuation gets stuck within 2e-3 of it."""
+    end = solve_mod.high_ca_branch_end(0.6)
+    _assert_accepted(solve_lubrication(0.6, lam_ratio=end + 0.003))
+    with pytest.raises(InvalidParameterError, match="ca_b=50"):
+        solve_lubrication(0.6, lam_ratio=0.85)
+    monkeypatch.setattr(solve_mod, "HIGH_CA_BRANCH_END", ((0.0, 0.0), (1.0, 0.0)))
     res = solve_lubrication(0.6, lam_ratio=0.85)
     assert not res.success and "stuck" in res.message and math.isnan(res.V_over_U)
+    stuck = float(res.message.split("stuck at ")[1].split()[0])
+    assert abs(stuck - end) < 2e-3
 
 
 @pytest.mark.slow
@@ -308,3 +318,110 @@ def test_near_critical_structure_over_nu_and_delta_thorough(nu, delta, bend):
     res = solve_lubrication(nu, lam_ratio=1 - delta, ca_b=50.0 if bend else math.inf)
     _assert_accepted(res)
     assert abs((res.V_over_U - 1) / delta - 1) <= 2.5 * math.sqrt(delta)
+
+
+# --------------------------------------------------------------------------- every input answered
+EXTREMES = [float("nan"), math.inf, -math.inf, 1e308, 1e-320, 0.0, -1.0]
+
+
+@pytest.mark.parametrize("value", EXTREMES)
+@pytest.mark.parametrize("name", ["nu", "lam", "lam_ratio", "ca_b", "max_time"])
+def test_extreme_inputs_raise_naming_the_parameter(name, value):
+    """nan, +-inf, 1e308, subnormal, 0, negative: InvalidParameterError naming the parameter
+    (before any solve), or a valid call."""
+    kwargs = {"nu": 0.9, "lam_ratio": 0.99, name: value}
+    if name == "lam":
+        del kwargs["lam_ratio"]
+    valid = ((name == "ca_b" and value == math.inf)
+             or (name == "max_time" and value in (1e308, 1e-320)))
+    if valid:
+        return          # valid calls: the high-Ca model, and budgets tested below
+    clock = time.perf_counter()
+    with pytest.raises(InvalidParameterError, match=f"^{name}="):
+        solve_lubrication(**kwargs)
+    assert time.perf_counter() - clock < 1.0
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(lam_ratio=1e-3), r"0\.5968 <= lam_ratio < 1.*ca_b=50"),
+    (dict(lam_ratio=0.5), r"high-Ca model \(ca_b=inf\) has no solution below"),
+    (dict(lam=0.5), r"0\.7901 <= lam < lam_c"),
+    (dict(lam_ratio=1e-3, ca_b=50.0), r"0\.1 <= lam_ratio < 1.*BEM"),
+    (dict(lam_ratio=0.99, ca_b=1e7),
+     r"ca_b=1e\+07 is invalid: valid range 0\.01 <= ca_b <= 100000"),
+])
+def test_outside_the_model_raises_at_once(kwargs, match):
+    """The high-Ca branch end, tiny confinements, huge Ca_B: refused before any work (the
+    math domain error of lam/lam_c = 1e-3 and the 20 s failure below the branch end are gone)."""
+    clock = time.perf_counter()
+    with pytest.raises(InvalidParameterError, match=match):
+        solve_lubrication(0.9, **kwargs)
+    assert time.perf_counter() - clock < 1.0
+
+
+def test_branch_end_table_is_monotone_and_interpolated():
+    table = np.array(solve_mod.HIGH_CA_BRANCH_END)
+    assert np.all(np.diff(table[:, 0]) > 0) and np.all(np.diff(table[:, 1]) <= 0)
+    assert solve_mod.high_ca_branch_end(0.9) == 0.5968
+    assert 0.5509 < solve_mod.high_ca_branch_end(0.92) < 0.5968
+    assert solve_mod.lowest_lam_ratio(0.9, 50.0) == solve_mod.MIN_LAM_RATIO
+    assert solve_mod.lowest_lam_ratio(0.999) == solve_mod.MIN_LAM_RATIO
+
+
+def test_sweep_refuses_too_many_points_and_points_outside_the_model():
+    clock = time.perf_counter()
+    with pytest.raises(InvalidParameterError, match="at most 2000 points"):
+        sweep_lubrication(0.9, np.linspace(0.6, 0.99, solve_mod.MAX_SWEEP_POINTS + 1),
+                          progress=False)
+    with pytest.raises(InvalidParameterError, match="ca_b=50"):
+        sweep_lubrication(0.9, [0.5, 0.99], progress=False)
+    with pytest.raises(InvalidParameterError, match="lam_ratios"):
+        sweep_lubrication(0.9, [0.9, float("nan")], progress=False)
+    with pytest.raises(InvalidParameterError, match="max_time"):
+        sweep_lubrication(0.9, [0.9, 0.99], progress=False, max_time=-1.0)
+    assert time.perf_counter() - clock < 1.0
+
+
+def test_max_nodes_is_capped_so_that_ctrl_c_is_honoured():
+    with pytest.raises(InvalidParameterError, match="max_nodes"):
+        solve_lubrication(0.9, lam_ratio=0.99, max_nodes=solve_mod.MAX_NODES + 1)
+
+
+@pytest.mark.parametrize("ca_b", [math.inf, 50.0])
+def test_spent_time_budget_is_a_failed_result_not_an_exception(ca_b):
+    """max_time stops a solve within about a second (tested at every right-hand-side
+    evaluation), returns success False, the reason, and no numbers."""
+    for max_time in (1e-320, 0.3):
+        clock = time.perf_counter()
+        # far from critical: reached by a continuation of 10-20 s from lam/lam_c = 0.98
+        res = solve_lubrication(0.9, lam_ratio=0.61, ca_b=ca_b, max_time=max_time)
+        assert time.perf_counter() - clock < max_time + 1.0
+        assert not res.success and "max_time" in res.message
+        assert math.isnan(res.V_over_U) and math.isnan(res.dp_plus_R0) and res.x.size == 0
+        d = res.to_dict()
+        assert d["V_over_U"] is None and d["tension_max"] is None and d["converged"] is False
+        json.dumps(d, allow_nan=False)
+
+
+def test_spent_time_budget_in_a_sweep_fails_the_remaining_points():
+    clock = time.perf_counter()
+    out = sweep_lubrication(0.9, [0.9, 0.95, 0.99], progress=False, max_time=0.05)
+    assert time.perf_counter() - clock < 1.5
+    assert [r.success for r in out] == [False, False, False]
+    assert all("max_time" in r.message and math.isnan(r.V_over_U) for r in out)
+
+
+def test_failed_result_saves_json_only_without_numbers(tmp_path):
+    res = solve_lubrication(0.9, lam_ratio=0.99, max_time=1e-320)
+    (path,) = res.save(tmp_path)
+    assert path.suffix == ".json" and list(tmp_path.iterdir()) == [path]
+    data = json.loads(path.read_text())             # strict JSON
+    assert data["converged"] is False and data["V_over_U"] is None and data["ca_b"] is None
+    assert data["shape_class"] is None
+
+
+def test_plot_shape_refuses_a_failed_result():
+    from lubrication.plotting import plot_shape
+    res = solve_lubrication(0.9, lam_ratio=0.99, max_time=1e-320)
+    with pytest.raises(InvalidParameterError, match="not converged"):
+        plot_shape(res)
