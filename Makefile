@@ -17,11 +17,12 @@ $(BIN)/vesicle-tube: pyproject.toml
 run: $(BIN)/vesicle-tube
 	$(BIN)/vesicle-tube estimate
 
+# -n 2: the suite runs on both cores of the reference machine (pytest-xdist)
 test: $(BIN)/vesicle-tube
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2
 
 validation: $(BIN)/vesicle-tube
-	$(BIN)/python -m pytest -q -m slow
+	$(BIN)/python -m pytest -q -n 2 -m slow
 
 benchmark: $(BIN)/vesicle-tube
 	$(BIN)/python tests/benchmarks/run_benchmarks.py

@@ -24,6 +24,7 @@ import json
 import math
 import os
 import sys
+import tempfile
 from pathlib import Path
 
 from . import io
@@ -76,8 +77,10 @@ def positive_int(text: str) -> int:
 # --------------------------------------------------------------------------- output paths
 
 def _writable_folder(option: str, folder: Path, what: str) -> None:
-    """``folder`` (or, if it does not exist yet, its nearest existing parent) is a writable
-    folder; otherwise a :class:`UsageError` naming the option."""
+    """``folder`` (or, if it does not exist yet, its nearest existing parent) is a folder in
+    which files can be created; otherwise a :class:`UsageError` naming the option. Tried for
+    real (a temporary folder made and removed): permission bits do not tell for root, for
+    read-only file systems or for /proc."""
     probe = folder
     while not probe.exists():
         if probe.parent == probe:
@@ -85,8 +88,11 @@ def _writable_folder(option: str, folder: Path, what: str) -> None:
         probe = probe.parent
     if not probe.is_dir():
         raise UsageError(f"{option} {what}: {str(probe)!r} is a file, not a folder")
-    if not os.access(probe, os.W_OK | os.X_OK):
-        raise UsageError(f"{option} {what}: the folder {str(probe)!r} is not writable")
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".vesicle-tube-", dir=probe))
+    except OSError as exc:
+        raise UsageError(f"{option} {what}: cannot write in the folder {str(probe)!r} "
+                         f"({exc.strerror or exc})") from None
 
 
 def check_output_dir(option: str, path) -> Path:

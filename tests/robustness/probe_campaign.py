@@ -43,6 +43,8 @@ PHYSICAL_KEYS = ("V_over_U", "dp_plus_R0", "dp_plus_R", "film_min", "film", "ell
 
 BAD_FLOATS = ("nan", "inf", "-inf", "1e308", "-1", "0", "1e-320", "abc", "")
 NON_FINITE = re.compile(r"(?<![\w-])(-?inf(inity)?|nan)(?![\w-])", re.IGNORECASE)
+# Ca_B = inf names the high-Ca lubrication model: a model, not a computed number
+MODEL_NAMES = re.compile(r"Ca_B = inf|inf \(high-Ca model\)")
 
 
 @dataclass
@@ -289,7 +291,7 @@ def _judge(o: Outcome) -> Outcome:
                 numbers = [k for k in PHYSICAL_KEYS if obj.get(k) is not None]
                 if numbers:
                     p.append("numbers from a failed solve: " + ", ".join(numbers))
-        elif o.code == 0 and NON_FINITE.search(o.stdout):
+        elif o.code == 0 and NON_FINITE.search(MODEL_NAMES.sub("", o.stdout)):
             p.append("silent nan/inf")
     if o.code == 2:
         lines = [line for line in o.stderr.splitlines() if line.strip()]
