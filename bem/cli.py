@@ -332,7 +332,7 @@ def _vesicle_options(p, sweep: bool) -> None:
                    help="tolerance of the steady residual max|u - V e_x|, 1e-14 to 10 "
                         "(default 1e-4) [U]")
     p.add_argument("--max-modes", type=positive_int, default=None, dest="max_modes",
-                   help="largest number of shape modes of the automatic refinement, 8 to 96 "
+                   help="largest number of shape modes of the automatic refinement, 24 to 96 "
                         "(default 40, or ~6 per tube radius of length for long vesicles, 64 at "
                         "nu = 0.6 near lam_c; near lam_c use --tol 1e-2 --residual-tol 5e-3)")
     add_max_time_option(p)

@@ -524,6 +524,10 @@ def check_vesicle_inputs(nu, lam=None, *, lam_ratio=None, ca_b=50.0, n_modes=Non
         max_modes = _mode_count("max_modes", max_modes)
     if n_modes is not None:
         n_modes = _mode_count("n_modes", n_modes)
+    elif max_modes is not None and max_modes < 24:
+        raise InvalidParameterError("max_modes", max_modes, f"24 <= max_modes <= {MAX_MODES}",
+                                    "the automatic refinement solves 16, 24, ... modes and "
+                                    "needs a pair; for a single coarse solve give n_modes")
     rung_modes = _mode_count("rung_modes", rung_modes)
     density_terms = int(check_range("density_terms", density_terms, 1, 64))
     max_iter = int(check_range("max_iter", max_iter, 1, 1000))

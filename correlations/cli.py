@@ -21,7 +21,8 @@ from lubrication.checks import (InvalidParameterError, OutOfRangeWarning, check_
 from lubrication.cli_contract import (EXIT_INTERRUPTED, EXIT_INVALID, EXIT_NOT_CONVERGED, EXIT_OK,
                                       Parser, UsageError, check_output_dir, check_plot_path,
                                       dump_json, format_rows, interrupted_message,
-                                      non_finite_keys, quiet_broken_pipe, save_plot)
+                                      non_finite_keys, one_line, quiet_broken_pipe,
+                                      save_plot)
 
 # Human labels of the output keys (key -> label); keys not listed are printed as they are. A
 # label names the quantity; the "unit" column says what its value is measured in (below).
@@ -420,7 +421,7 @@ def _run(args) -> int:
             _check_outputs(args)
             out, human = args.func(args)
         except (InvalidParameterError, UsageError) as exc:
-            print(f"{prog}: error: {exc}", file=sys.stderr)
+            print(f"{prog}: error: {one_line(exc)}", file=sys.stderr)
             return EXIT_INVALID
     bad = non_finite_keys(out)
     if bad:     # a safety net: every command reports missing values as None, never NaN/inf

@@ -35,18 +35,24 @@ EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 130, 141
 __all__ = ["EXIT_OK", "EXIT_NOT_CONVERGED", "EXIT_INVALID", "EXIT_INTERRUPTED",
            "EXIT_BROKEN_PIPE", "UsageError", "Parser", "format_rows", "format_value",
            "check_output_dir", "check_plot_path", "save_plot", "non_finite_keys", "dump_json",
-           "finite_float", "positive_int", "add_max_time_option"]
+           "finite_float", "positive_int", "add_max_time_option", "one_line"]
 
 
 class UsageError(Exception):
     """Options given in a combination or with a value the command does not accept (exit 2)."""
 
 
+def one_line(text: str) -> str:
+    """``text`` with every character that is not printable (newlines, control characters a
+    user may have typed) written as an escape, so that a message stays one line."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(text))
+
+
 class Parser(argparse.ArgumentParser):
     """argparse with the contract's one-line error and exit status 2."""
 
     def error(self, message):
-        self.exit(EXIT_INVALID, f"{self.prog}: error: {message}\n")
+        self.exit(EXIT_INVALID, f"{one_line(self.prog)}: error: {one_line(message)}\n")
 
 
 # --------------------------------------------------------------------------- option types

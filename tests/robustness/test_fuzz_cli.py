@@ -30,6 +30,8 @@ from correlations.cli import main
 PHYSICAL_KEYS = ("V_over_U", "dp_plus_R0", "dp_plus_R", "film_min", "film", "ell", "tension_max",
                  "tension_front", "drag_K", "length", "wall_shear_max")
 NON_FINITE = re.compile(r"(?<![\w-])(-?inf(inity)?|nan)(?![\w-])", re.IGNORECASE)
+# Ca_B = inf names the high-Ca lubrication model: a model, not a computed number
+MODEL_NAMES = re.compile(r"Ca_B = inf|inf \(high-Ca model\)")
 TIME_LIMIT_S = 20          # per example; a solver command also gets --max-time (below)
 
 
@@ -149,12 +151,13 @@ def assert_contract(argv, code, out, err):
             given = {k: obj[k] for k in PHYSICAL_KEYS if obj.get(k) is not None}
             assert not given, f"{argv}: numbers from a failed solve {given}"
     elif code == 0:
-        assert not NON_FINITE.search(out), f"{argv}: non-finite number printed\n{out}"
+        assert not NON_FINITE.search(MODEL_NAMES.sub("", out)), \
+            f"{argv}: non-finite number printed\n{out}"
     if code == 1:
         assert err.strip(), f"{argv}: exit 1 without a message"
 
 
-FUZZ = settings(max_examples=120, deadline=None, derandomize=True, database=None,
+FUZZ = settings(max_examples=300, deadline=None, derandomize=True, database=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
 
@@ -164,13 +167,13 @@ def test_cheap_commands_keep_the_contract(argv):
     assert_contract(argv, *run_cli(argv))
 
 
-@settings(FUZZ, max_examples=40)
+@settings(FUZZ, max_examples=80)
 @given(argv=command_lines(SOLVERS))
 def test_solver_commands_keep_the_contract(argv):
     assert_contract(argv, *run_cli(argv))
 
 
-@settings(FUZZ, max_examples=40)
+@settings(FUZZ, max_examples=100)
 @given(argv=st.lists(st.one_of(st.sampled_from(
     ["geometry", "estimate", "viscosity", "fahraeus", "lubrication", "bem", "sphere", "--nu",
      "--lam", "--json", "--plot", "--out", "--solver", "bem", "--help", "-h", "0.5"]),
