@@ -943,32 +943,34 @@ def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
     # the lowest ratio carries the model's range check (its message names the value)
     base = _check_inputs(nu, None, float(ratios.min()), ca_b, tol, max_nodes, max_time)
     from tqdm.auto import tqdm
-    bar = tqdm(total=ratios.size, disable=not progress, desc=f"lubrication nu={base.nu:g}",
-               unit="point")
     results: list[LubricationResult | None] = [None] * ratios.size
-    i_anchor = int(np.argmin(np.abs(ratios - ANCHOR_RATIO)))
-    anchor = _solve_point(replace(base, lam=float(ratios[i_anchor]) * base.lam_c), None)
-    results[i_anchor] = anchor
-    bar.update(1)
-    order = np.argsort(ratios, kind="stable")
-    pos = int(np.flatnonzero(order == i_anchor)[0])
-    for direction in (order[pos + 1:], order[:pos][::-1]):      # upward, then downward
-        current = anchor
-        for i in direction:
-            ratio = float(ratios[i])
-            prob = replace(base, lam=ratio * base.lam_c)
-            if base.deadline.expired():
-                res = _failed(prob, f"not attempted: {base.deadline.message()}", {}, {})
-            elif not current.success:
-                res = _failed(prob, f"not attempted: the continuation failed before "
-                                    f"lam/lam_c = {ratio:.6g} ({current.message})", {}, {})
-            else:
-                clock = time.perf_counter()
-                res = _march(prob, current, ratio, max_step)
-                res = replace(res, timings=dict(res.timings, total=time.perf_counter() - clock))
-                current = res
-            results[i] = res
-            bar.update(1)
-            logger.debug("nu=%.4g lam/lam_c=%.6g: %s", base.nu, ratio, res.message)
-    bar.close()
+    # the bar is closed on any exit (Ctrl-C included), so that it is not redrawn after the
+    # command line's last message
+    with tqdm(total=ratios.size, disable=not progress, desc=f"lubrication nu={base.nu:g}",
+              unit="point") as bar:
+        i_anchor = int(np.argmin(np.abs(ratios - ANCHOR_RATIO)))
+        anchor = _solve_point(replace(base, lam=float(ratios[i_anchor]) * base.lam_c), None)
+        results[i_anchor] = anchor
+        bar.update(1)
+        order = np.argsort(ratios, kind="stable")
+        pos = int(np.flatnonzero(order == i_anchor)[0])
+        for direction in (order[pos + 1:], order[:pos][::-1]):      # upward, then downward
+            current = anchor
+            for i in direction:
+                ratio = float(ratios[i])
+                prob = replace(base, lam=ratio * base.lam_c)
+                if base.deadline.expired():
+                    res = _failed(prob, f"not attempted: {base.deadline.message()}", {}, {})
+                elif not current.success:
+                    res = _failed(prob, f"not attempted: the continuation failed before "
+                                        f"lam/lam_c = {ratio:.6g} ({current.message})", {}, {})
+                else:
+                    clock = time.perf_counter()
+                    res = _march(prob, current, ratio, max_step)
+                    res = replace(res, timings=dict(res.timings,
+                                                    total=time.perf_counter() - clock))
+                    current = res
+                results[i] = res
+                bar.update(1)
+                logger.debug("nu=%.4g lam/lam_c=%.6g: %s", base.nu, ratio, res.message)
     return results
