@@ -503,14 +503,13 @@ def check_drop_inputs(lam, ca, *, n_modes=None, tol=1e-5, residual_tol=1e-4, max
     return lam, ca, n_modes, tol, residual_tol, max_modes
 
 
-def _mode_count(name, value, lo) -> int:
-    """An integer number of shape modes within lo..MAX_MODES."""
-    value = check_range(name, value, lo, MAX_MODES,
+def _mode_count(name, value, lo, hi=MAX_MODES) -> int:
+    """An integer number of shape modes within lo..hi (the drop's or the vesicle's envelope)."""
+    value = check_range(name, value, lo, hi,
                         reason="more modes exceed the resource envelope of one level "
                                "(memory, time per difference Jacobian)")
     if float(value) != int(value):
-        raise InvalidParameterError(name, float(value), f"an integer, {lo} <= {name} <= "
-                                                        f"{MAX_MODES}")
+        raise InvalidParameterError(name, float(value), f"an integer, {lo} <= {name} <= {hi}")
     return int(value)
 
 

@@ -105,6 +105,7 @@ from lubrication.geometry import critical_length, resolve_confinement
 
 from .assembly import poiseuille
 from .drop import DropDiscretisation, DropOperator, _panels_for
+from .drop import _mode_count as _drop_mode_count  # one check, the vesicle's MAX_MODES
 from .membrane import bending_force, tension_basis, tension_profile
 from .newton import levenberg_marquardt, valley_levenberg_marquardt
 from .quadrature import DEFAULT_ORDER, influence
@@ -499,14 +500,8 @@ def _check_inputs(nu, lam, lam_ratio, ca_b):
 
 
 def _mode_count(name, value) -> int:
-    """An integer number of shape modes, 8 <= value <= MAX_MODES."""
-    value = check_range(name, value, 8, MAX_MODES,
-                        reason="more modes exceed the resource envelope of one level "
-                               "(time per difference Jacobian, memory)")
-    if float(value) != int(value):
-        raise InvalidParameterError(name, float(value), f"an integer, 8 <= {name} <= "
-                                                        f"{MAX_MODES}")
-    return int(value)
+    """An integer number of shape modes, 8 <= value <= MAX_MODES (the vesicle's envelope)."""
+    return _drop_mode_count(name, value, 8, MAX_MODES)
 
 
 def check_vesicle_inputs(nu, lam=None, *, lam_ratio=None, ca_b=50.0, n_modes=None,

@@ -98,8 +98,8 @@ def _quantity_rows(quantities: dict, keys) -> list:
 
 def _unphysical(quantity: str, value) -> str:
     """Why ``value`` may not be reported as ``quantity`` ("" if it may): the output checks of
-    :func:`correlations.registry.check_output` (finite, within the physical bounds)."""
-    from .registry import check_output
+    :func:`lubrication.checks.check_output` (finite, within the physical bounds)."""
+    from lubrication.checks import check_output
     return check_output(quantity, value, {}) if value is not None else ""
 
 
@@ -410,6 +410,31 @@ def _check_outputs(args) -> None:
     check_plot_path("--plot", getattr(args, "plot", None))
 
 
+# Result keys of every command checked against the physical bounds
+# (lubrication.checks.OUTPUT_BOUNDS), with the quantity whose bound applies.
+_BOUNDED_KEYS = (("V_over_U", "V_over_U"), ("dp_plus_R0", "dp_plus_R0"),
+                 ("dp_plus_R", "dp_plus_R0"), ("film_min", "film"), ("film", "film"),
+                 ("ell", "ell"), ("eta_rel", "eta_rel"))
+
+
+def _unphysical_flags(out: dict) -> list[str]:
+    """Every reported number outside the bounds the physics sets, at the top level of the
+    result and in its sweep ``points``: flagged, never silent (a model used beyond its meaning,
+    e.g. the lubrication model for a short vesicle)."""
+    from lubrication.checks import check_output
+    flags = []
+    rows = [("", out)] + [(f"point {i + 1}: ", p) for i, p in enumerate(out.get("points") or [])
+                          if isinstance(p, dict)]
+    for where, row in rows:
+        for key, quantity in _BOUNDED_KEYS:
+            value = row.get(key)
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                problem = check_output(quantity, float(value), {})
+                if problem:
+                    flags.append(f"UNPHYSICAL {where}{key}: {problem}")
+    return flags
+
+
 def _run(args) -> int:
     """Run the command of ``args`` under the contract of :mod:`lubrication.cli_contract`."""
     from lubrication.io import forget_written_files, written_files
@@ -428,8 +453,12 @@ def _run(args) -> int:
         print(f"{prog}: error: the result has non-finite values ({', '.join(bad[:5])}): the "
               "computation overflowed or failed; no numbers are reported", file=sys.stderr)
         return EXIT_NOT_CONVERGED
+    flags = _unphysical_flags(out)
+    if flags:
+        out["unphysical"] = flags
+        human += "\n" + "\n".join(flags)
     messages = out.get("warnings", []) + [str(w.message) for w in caught
-                                          if issubclass(w.category, OutOfRangeWarning)]
+                                          if issubclass(w.category, OutOfRangeWarning)] + flags
     for m in messages:
         print(f"warning: {m}", file=sys.stderr)
     if messages:

@@ -86,7 +86,6 @@ UNITS = {
     "eta_rel": "-", "R0_um": "um", "d_c_um": "um", "L_c_um": "um", "V_mm_s": "mm/s",
     "dp_plus_Pa": "Pa", "film_nm": "nm", "length_um": "um", "tension_front_mN_m": "mN/m",
 }
-_UNITS = UNITS
 
 
 @dataclass(frozen=True)
@@ -164,7 +163,7 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
         if not bad:
             value, failure = _evaluate(m, quantity, known, log)
             if not failure:
-                return Quantity(value, _UNITS[quantity], m.name, True, m.source)
+                return Quantity(value, UNITS[quantity], m.name, True, m.source)
             reasons.append(f"{m.name}: {failure}")
             continue
         reasons.append(f"{m.name}: {'; '.join(bad)}")
@@ -173,12 +172,12 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
             fallback = (dist, m)
     note = "no valid method (" + " | ".join(reasons) + ")" if reasons else "no method"
     if fallback is None:
-        return Quantity(None, _UNITS[quantity], None, False, "", note)
+        return Quantity(None, UNITS[quantity], None, False, "", note)
     m = fallback[1]
     value, failure = _evaluate(m, quantity, {**extrapolated, **known}, log)
     if failure:
-        return Quantity(None, _UNITS[quantity], None, False, "", f"{note}; {m.name}: {failure}")
-    return Quantity(value, _UNITS[quantity], m.name, False, m.source, "EXTRAPOLATED; " + note)
+        return Quantity(None, UNITS[quantity], None, False, "", f"{note}; {m.name}: {failure}")
+    return Quantity(value, UNITS[quantity], m.name, False, m.source, "EXTRAPOLATED; " + note)
 
 
 def _evaluate(m, quantity: str, state: dict, log: dict):
@@ -271,24 +270,24 @@ def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapola
     known, extrapolated, quantities = dict(state), {}, {}
     for name in QUANTITIES:
         if name in hematocrits:
-            quantities[name] = Quantity(hematocrits[name], _UNITS[name], "input", True)
+            quantities[name] = Quantity(hematocrits[name], UNITS[name], "input", True)
             continue
         if name in _HEMATOCRIT_KEYS and not hematocrits:
-            quantities[name] = Quantity(None, _UNITS[name], None, False, "", NO_HEMATOCRIT)
+            quantities[name] = Quantity(None, UNITS[name], None, False, "", NO_HEMATOCRIT)
             continue
         q = quantities[name] = _select(name, known, extrapolated, extrapolate, solvers, log)
         if q.value is not None:
             (known if q.valid else extrapolated)[name] = q.value
-    geometric = {k: Quantity(state[k], _UNITS[k], "geometry (Chen 2020 §III)", True)
+    geometric = {k: Quantity(state[k], UNITS[k], "geometry (Chen 2020 §III)", True)
                  for k in ("lam_c", "ell_c", "delta")}
     dp = quantities["dp_plus_R0"]
     # dp+ R/(eta U) = (dp+ R0/(eta U)) / lam: a division, since 1/lam overflows for tiny lam.
-    dp_R = (Quantity(dp.value / lam, _UNITS["dp_plus_R"], dp.method, dp.valid, dp.source, dp.note)
-            if dp.value is not None else Quantity(None, _UNITS["dp_plus_R"], None, False, "",
+    dp_R = (Quantity(dp.value / lam, UNITS["dp_plus_R"], dp.method, dp.valid, dp.source, dp.note)
+            if dp.value is not None else Quantity(None, UNITS["dp_plus_R"], None, False, "",
                                                   dp.note))
     derived = {"dp_plus_R": dp_R,
                "tension_front_etaU": _scaled(quantities["tension_front"], 1.0,
-                                             _UNITS["tension_front_etaU"], quantities["V_over_U"])}
+                                             UNITS["tension_front_etaU"], quantities["V_over_U"])}
     return state, {"nu": Quantity(nu, "-", "input", True), "lam": Quantity(lam, "-", "input", True),
                    "passes": Quantity(True, "", "lam < lam_c", True),
                    **geometric, **quantities, **derived}
@@ -356,16 +355,16 @@ def _ca_b_quantity(ca_b, solvers: tuple, log: dict) -> Quantity:
     et al. 2020) when none is given.
     """
     if ca_b is not None:
-        return Quantity(ca_b, _UNITS["ca_b"], "input", True)
+        return Quantity(ca_b, UNITS["ca_b"], "input", True)
     ran = sorted(s for s in solvers if s in log.get("ran", ()))
     if ran:
         default = {"lubrication": LUBRICATION_DEFAULT_CA_B, "bem": BEM_DEFAULT_CA_B}
         values = {default[s] for s in ran}
         if len(values) == 1:
-            return Quantity(values.pop(), _UNITS["ca_b"],
+            return Quantity(values.pop(), UNITS["ca_b"],
                             f"assumed by the {' and '.join(ran)} solver (not given; Chen et al. "
                             "2020 value)", True)
-    return Quantity(None, _UNITS["ca_b"], None, False, "",
+    return Quantity(None, UNITS["ca_b"], None, False, "",
                     "not given: the closed forms assume Chen et al. 2020's regime 10 <= Ca_B <= "
                     "1e4 (their results are at Ca_B = 50); give --ca-b to state it")
 

@@ -54,14 +54,13 @@ there the estimate only says that the BEM covers the case (a solve takes minutes
 from __future__ import annotations
 
 import functools
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from numpy.linalg import LinAlgError
 
 from lubrication import asymptotics
-from lubrication.checks import ValidityRange
+from lubrication.checks import OUTPUT_BOUNDS, ValidityRange, check_output
 
 from . import film, pressure, shape, viscosity
 
@@ -294,44 +293,6 @@ METHODS: tuple[Method, ...] = (
     Method("eta_rel", "pries1992_in_vitro", "Pries, Neuhaus & Gaehtgens 1992",
            viscosity.PRIES1992_RANGE, _eta_pries1992, requires=("diameter_um", "discharge_hematocrit")),
 )
-
-#: Bounds the physics sets on every output of the table, checked on every value before it is
-#: reported (a value outside comes from a method used beyond its meaning or from a failed
-#: solve: it is refused and the next method is tried). ``(lo, hi, reason)``, closed bounds.
-OUTPUT_BOUNDS = {
-    "V_over_U": (1.0, 2.0, "a cell on the axis moves between the mean (1) and the centreline (2) "
-                           "velocity of the Poiseuille flow"),
-    "film": (0.0, 1.0, "the film lies between the membrane and the wall: 0 <= h/R <= 1"),
-    "ell": (0.0, math.inf, "a length is positive"),
-    "dp_plus_R0": (0.0, math.inf, "a force-free cell in Stokes flow raises the pressure drop "
-                                  "(reciprocal theorem: dp+ >= 0)"),
-    "tension_front": (0.0, math.inf, "the front tension of a confined vesicle pulls (> 0)"),
-    "tube_hematocrit": (0.0, 1.0, "a volume fraction"),
-    "discharge_hematocrit": (0.0, 1.0, "a volume fraction"),
-    "eta_rel": (1.0, math.inf, "force-free cells add dissipation: eta_rel >= 1"),
-}
-
-
-def check_output(quantity: str, value, state: dict) -> str:
-    """Why ``value`` cannot be reported for ``quantity`` (empty string if it can).
-
-    Checks finiteness, :data:`OUTPUT_BOUNDS`, and H_T <= H_D (single file, H_T/H_D = U/V <= 1,
-    physics-notes §6) against a hematocrit of the other kind already in ``state``.
-    """
-    if isinstance(value, str):
-        return ""
-    if value is None or not math.isfinite(value):
-        return f"{quantity} = {value!r} is not a finite number"
-    lo, hi, reason = OUTPUT_BOUNDS.get(quantity, (-math.inf, math.inf, ""))
-    if not lo <= value <= hi:
-        return f"{quantity} = {value:.6g} outside {lo:g} <= {quantity} <= {hi:g} ({reason})"
-    h_t = value if quantity == "tube_hematocrit" else state.get("tube_hematocrit")
-    h_d = value if quantity == "discharge_hematocrit" else state.get("discharge_hematocrit")
-    if quantity in ("tube_hematocrit", "discharge_hematocrit") and h_t is not None \
-            and h_d is not None and h_t > h_d:
-        return (f"tube hematocrit {h_t:.6g} > discharge hematocrit {h_d:.6g}: impossible, "
-                "H_T/H_D = U/V <= 1")
-    return ""
 
 
 #: Output quantities in evaluation order (later rows may require earlier ones).

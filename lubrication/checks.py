@@ -28,6 +28,8 @@ __all__ = [
     "check_choice",
     "scalar_or_array",
     "Deadline",
+    "OUTPUT_BOUNDS",
+    "check_output",
 ]
 
 
@@ -230,3 +232,50 @@ class Deadline:
     def message(self) -> str:
         """The reason an expired solve gives."""
         return f"stopped at the time limit max_time={self.max_time:g} s before converging"
+
+
+#: Bounds the physics sets on the outputs, ``quantity: (lo, hi, reason)`` (closed bounds): the
+#: estimate checks every value of its method table against them before it is reported (a value
+#: outside comes from a method used beyond its meaning or from a failed solve: it is refused
+#: and the next method is tried), and the command line flags any solver output outside them.
+OUTPUT_BOUNDS = {
+    "V_over_U": (1.0, 2.0, "a cell on the axis moves between the mean (1) and the centreline (2) "
+                           "velocity of the Poiseuille flow"),
+    "film": (0.0, 1.0, "the film lies between the membrane and the wall: 0 <= h/R <= 1"),
+    "ell": (0.0, math.inf, "a length is positive"),
+    "dp_plus_R0": (0.0, math.inf, "at a fixed flow rate Q, dp+ Q is the extra dissipation of a "
+                                  "force-free cell in Stokes flow, which is not negative"),
+    "tension_front": (0.0, math.inf, "the front tension of a confined vesicle pulls (> 0)"),
+    "tube_hematocrit": (0.0, 1.0, "a volume fraction"),
+    "discharge_hematocrit": (0.0, 1.0, "a volume fraction"),
+    "eta_rel": (1.0, math.inf, "force-free cells add dissipation: eta_rel >= 1"),
+}
+
+
+def check_output(quantity: str, value, state: dict) -> str:
+    """Why ``value`` cannot be reported for ``quantity`` (empty string if it can).
+
+    Checks finiteness, :data:`OUTPUT_BOUNDS`, and H_T <= H_D (cell flux conservation in single
+    file: H_T/H_D = U/V <= 1) against a hematocrit of the other kind already in ``state``.
+
+    Examples
+    --------
+    >>> check_output("V_over_U", 1.2, {})
+    ''
+    >>> check_output("dp_plus_R0", -0.3, {})[:40]
+    'dp_plus_R0 = -0.3 outside 0 <= dp_plus_R'
+    """
+    if isinstance(value, str):
+        return ""
+    if value is None or not math.isfinite(value):
+        return f"{quantity} = {value!r} is not a finite number"
+    lo, hi, reason = OUTPUT_BOUNDS.get(quantity, (-math.inf, math.inf, ""))
+    if not lo <= value <= hi:
+        return f"{quantity} = {value:.6g} outside {lo:g} <= {quantity} <= {hi:g} ({reason})"
+    h_t = value if quantity == "tube_hematocrit" else state.get("tube_hematocrit")
+    h_d = value if quantity == "discharge_hematocrit" else state.get("discharge_hematocrit")
+    if quantity in ("tube_hematocrit", "discharge_hematocrit") and h_t is not None \
+            and h_d is not None and h_t > h_d:
+        return (f"tube hematocrit {h_t:.6g} > discharge hematocrit {h_d:.6g}: impossible, "
+                "H_T/H_D = U/V <= 1")
+    return ""

@@ -554,3 +554,22 @@ def test_dimensionless_estimate_states_the_ca_b_it_used(cli):
     _, out, _ = cli("estimate", "--nu", "0.9", "--lam", "1.25", "--ca-b", "30", "--json")
     obj = strict_json(out)
     assert obj["ca_b"] == 30.0 and obj["methods"]["ca_b"]["method"] == "input"
+
+
+def test_an_unphysical_model_output_is_flagged_not_silent(cli):
+    """The lubrication model of a short vesicle (nu = 0.9, lam/lam_c = 0.3) gives dp+ < 0, which
+    no force-free cell can (dp+ Q is its extra dissipation): the number is flagged in the JSON,
+    on stderr and under the table."""
+    argv = ("lubrication", "--nu", "0.9", "--lam-ratio", "0.3", "--ca-b", "50")
+    code, out, err = cli(*argv, "--json")
+    obj = strict_json(out)
+    assert code == 0 and obj["dp_plus_R0"] < 0
+    assert any(f.startswith("UNPHYSICAL dp_plus_R0:") for f in obj["unphysical"])
+    assert "warning: UNPHYSICAL dp_plus_R0" in err
+    code, out, err = cli(*argv)
+    assert "UNPHYSICAL dp_plus_R0" in out
+
+
+def test_physical_outputs_raise_no_flag(cli):
+    code, out, err = cli("lubrication", "--nu", "0.9", "--lam-ratio", "0.99", "--json")
+    assert code == 0 and "unphysical" not in strict_json(out) and "UNPHYSICAL" not in err

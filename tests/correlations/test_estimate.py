@@ -764,7 +764,7 @@ def fake_lubrication(monkeypatch):
     ({"raises": InvalidParameterError("lam", 1.0, "lam < 0.9")}, "lam < 0.9"),
     ({"V_over_U": math.nan}, "finite"),
     ({"V_over_U": 0.5}, "V_over_U = 0.5 outside 1 <= V_over_U <= 2"),   # output check
-    ({"dp_plus_R0": -3.0}, "dp+ >= 0"),
+    ({"dp_plus_R0": -3.0}, "extra dissipation"),
 ])
 def test_a_failed_solver_gives_no_number_and_the_closed_forms_answer(fake_lubrication, kw, reason):
     solver = fake_lubrication(**kw)
