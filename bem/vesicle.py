@@ -389,11 +389,13 @@ def _prolonged_columns(coarse: VesicleOperator, coarse_state: dict, op: VesicleO
     """Jacobian columns of ``op``'s free modes that ``coarse`` also has, from the coarse
     level's final Jacobian (``coarse_state["jacobian"]``, weighted rows at its nodes)
     interpolated in tau to ``op``'s nodes: {free index: column}; empty if the two levels
-    solve for different area modes. The unweighted rows d(u - V e_x)/dc are smooth in tau
-    within a coarse panel (the velocity of a smooth shape), so the panel's Lagrange
-    interpolant carries them."""
+    solve for different area modes or have different arc-length densities (a mode is then
+    another shape change). The unweighted rows d(u - V e_x)/dc are smooth in tau within a
+    coarse panel (the velocity of a smooth shape), so the panel's Lagrange interpolant
+    carries them."""
     J = coarse_state.get("jacobian")
-    if J is None or coarse.area_mode != op.area_mode:
+    if (J is None or coarse.area_mode != op.area_mode
+            or not np.array_equal(coarse.density, op.density)):
         return {}
     p = coarse.p
     tn, _ = gauss_legendre(p)
