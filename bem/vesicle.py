@@ -115,6 +115,7 @@ from .shape import (
     fit_curve,
     spheroid_curve,
 )
+from .threads import single_threaded_blas
 
 __all__ = ["CA_B_MAX", "CA_B_MIN", "MAX_MODES", "NEAR_CRITICAL", "WALL_REFINEMENT",
            "check_vesicle_inputs", "VesicleOperator", "capsule_seed",
@@ -593,6 +594,7 @@ def check_vesicle_inputs(nu, lam=None, *, lam_ratio=None, ca_b=50.0, n_modes=Non
             density_terms, max_iter)
 
 
+@single_threaded_blas()      # small dense products between numba loops (bem.threads)
 def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | None = None,
                   ca_b: float = 50.0, initial=None, n_modes: int | None = None,
                   tol: float = 1e-4, residual_tol: float = 1e-4, max_modes: int | None = None,
@@ -877,6 +879,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         tension_modes=np.asarray(st["g"]).copy(), **prof)
 
 
+@single_threaded_blas()
 def mode_convergence(result, modes, *, density: str | None = "bend", density_terms: int = 16,
                      xtol: float = 1e-9, max_iter: int = 40, progress=None) -> list[dict]:
     r"""Mesh-convergence study of a steady vesicle at a *fixed* parametrisation density.
