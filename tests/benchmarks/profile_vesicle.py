@@ -14,7 +14,7 @@ evaluations are split by what asked for them (difference-Jacobian columns, direc
 updates, damped LM trial steps, other: initial point and extrapolation) per level. The
 SpectralCurve rows below the table are inclusive and count every caller.
 
-(b) The cost of ONE evaluation (``VesicleOperator.evaluate`` of a fixed shape: the lubrication
+(b) The cost of ONE evaluation (with the solver's BLAS threading, :mod:`bem.threads`) (``VesicleOperator.evaluate`` of a fixed shape: the lubrication
 shape at (0.9, 1.0), Ca_B = 50, fitted with N modes) and of one Newton step (one difference
 Jacobian plus one damped LM step) against N, with the panels of
 :func:`bem.vesicle.vesicle_discretisation` (N), and the fitted exponent p of time ~ N^p. The
@@ -273,6 +273,16 @@ def print_solve(d: dict) -> None:
 
 
 # ---------------------------------------------------------------------------- (b) scaling
+def _solver_blas():
+    """The BLAS threading that solve_vesicle uses (bem.threads, where it exists)."""
+    try:
+        from bem.threads import single_threaded_blas
+    except ImportError:                              # older versions of the package
+        from contextlib import nullcontext
+        return nullcontext()
+    return single_threaded_blas()
+
+
 def _fit(ns, ts) -> float:
     import numpy as np
     ok = [(n, t) for n, t in zip(ns, ts) if t > 0 and math.isfinite(t)]
@@ -306,6 +316,8 @@ def profile_scaling(modes, repeats: int, newton: bool, nu=0.9, lam=1.0, ca_b=50.
 
         prof = Profiler()
         install(prof)
+        blas = _solver_blas()
+        blas.__enter__()
         try:
             fun(z0)                                       # first call: caches
             best, per = math.inf, defaultdict(lambda: math.inf)
@@ -326,6 +338,7 @@ def profile_scaling(modes, repeats: int, newton: bool, nu=0.9, lam=1.0, ca_b=50.
                 t_newton = time.perf_counter() - t0
                 n_newton = op.evaluations - ev0
         finally:
+            blas.__exit__(None, None, None)
             prof.restore()
         rows.append({"modes": n, "panels": disc.n_panels, "nodes": op.tau.size,
                      "wall_nodes": op.wall.n_nodes, "inlet_nodes": op.inlet.n_nodes,
@@ -377,9 +390,11 @@ def main(argv=None) -> None:
                          "LAM = R0/R [-] (repeatable; default 0.9 1.0)")
     ap.add_argument("--ca-b", type=float, default=50.0, help="Ca_B = eta U R0^2/kappa [-] (default 50)")
     ap.add_argument("--tol", type=float, default=None,
-                    help="refinement-pair tolerance of the solves [-] (default: the solver's)")
+                    help="refinement-pair tolerance of every --case solve [-] (default: the "
+                         "solver's)")
     ap.add_argument("--residual-tol", type=float, default=None,
-                    help="steady residual tolerance [U] (default: the solver's)")
+                    help="steady residual tolerance of every --case solve [U] (default: the "
+                         "solver's)")
     ap.add_argument("--modes", default="16,24,32,48,64",
                     help="shape modes of the scaling table (b), comma separated (default "
                          "16,24,32,48,64)")
