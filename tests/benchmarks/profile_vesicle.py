@@ -14,11 +14,11 @@ evaluations are split by what asked for them (difference-Jacobian columns, direc
 updates, damped LM trial steps, other: initial point and extrapolation) per level. The
 SpectralCurve rows below the table are inclusive and count every caller.
 
-(b) The cost of ONE evaluation (with the solver's BLAS threading, :mod:`bem.threads`) (``VesicleOperator.evaluate`` of a fixed shape: the lubrication
+(b) The cost of ONE evaluation (``VesicleOperator.evaluate`` of a fixed shape: the lubrication
 shape at (0.9, 1.0), Ca_B = 50, fitted with N modes) and of one Newton step (one difference
-Jacobian plus one damped LM step) against N, with the panels of
-:func:`bem.vesicle.vesicle_discretisation` (N), and the fitted exponent p of time ~ N^p. The
-evaluation times are minima over ``--repeats``; the per-category columns are minima per
+Jacobian plus one damped LM step), with the solver's BLAS threading (:mod:`bem.threads`),
+against N, with the panels of :func:`bem.vesicle.vesicle_discretisation` (N), and the fitted
+exponent p of time ~ N^p. The evaluation times are minima over ``--repeats``; the per-category columns are minima per
 category (their sum can be below the minimum total).
 
 Timings are wall-clock and depend on the load of the machine: compare BIE solves and evaluation
