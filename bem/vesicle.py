@@ -107,8 +107,8 @@ from .assembly import poiseuille
 from .drop import DropDiscretisation, DropOperator, _panels_for
 from .drop import _mode_count as _drop_mode_count  # one check, the vesicle's MAX_MODES
 from .membrane import bending_force, tension_basis, tension_profile
-from .newton import levenberg_marquardt, valley_levenberg_marquardt
-from .quadrature import DEFAULT_ORDER, influence
+from .newton import difference_jacobian, levenberg_marquardt, valley_levenberg_marquardt
+from .quadrature import DEFAULT_ORDER, barycentric_weights, gauss_legendre, influence
 from .shape import (
     SpectralCurve,
     equidistributing_density,
@@ -116,6 +116,7 @@ from .shape import (
     fit_curve,
     spheroid_curve,
 )
+from .threads import single_threaded_blas
 
 __all__ = ["CA_B_MAX", "CA_B_MIN", "MAX_MODES", "NEAR_CRITICAL", "WALL_REFINEMENT",
            "check_vesicle_inputs", "VesicleOperator", "capsule_seed",
@@ -287,16 +288,24 @@ def vesicle_discretisation(n_modes: int, order: int = DEFAULT_ORDER,
 
 
 # ---------------------------------------------------------------------------- initial shapes
+#: BVP tolerance of the lubrication solution that seeds a solve: the seed is a fit with 16-24
+#: modes, far coarser; against the default 1e-7, V/U changes by < 1e-8 at (0.9, 1.0),
+#: (0.61, 1.39) and (0.6, 1.94) while the solve of (0.61, 1.39) takes 2.4 s instead of 6.3 s
+#: (a continuation in lam/lam_c with fewer mesh nodes)
+SEED_LUBRICATION_TOL = 1e-4
+
 def lubrication_seed(nu: float, lam: float, ca_b: float, n_modes: int,
                      density: str = "uniform", density_terms: int = 16,
                      max_time: float | None = None):
     """Spectral curve fitted to the lubrication solution at (nu, lam, ca_b) (see
     :func:`seed_from_lubrication`); None if the solver fails (or runs out of ``max_time``
-    seconds) or the fit is rejected. Returns (curve, lubrication result)."""
+    seconds) or the fit is rejected. Returns (curve, lubrication result), the latter solved
+    to the BVP tolerance ``SEED_LUBRICATION_TOL``."""
     from lubrication.solve import solve_lubrication
 
     try:
-        lub = solve_lubrication(nu, lam, ca_b=ca_b, max_time=max_time)
+        lub = solve_lubrication(nu, lam, ca_b=ca_b, tol=SEED_LUBRICATION_TOL,
+                                max_time=max_time)
     except InvalidParameterError as exc:         # outside the lubrication model's range
         log.info("no lubrication seed: %s", exc)
         return None, None
@@ -385,13 +394,56 @@ def capsule_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
 
 
 # ---------------------------------------------------------------------------- one level
+def _prolonged_columns(coarse: VesicleOperator, coarse_state: dict, op: VesicleOperator,
+                       state: dict) -> dict:
+    """Jacobian columns of ``op``'s free modes that ``coarse`` also has, from the coarse
+    level's final Jacobian (``coarse_state["jacobian"]``, weighted rows at its nodes)
+    interpolated in tau to ``op``'s nodes: {free index: column}; empty if the two levels
+    solve for different area modes or have different arc-length densities (a mode is then
+    another shape change). The unweighted rows d(u - V e_x)/dc are smooth in tau within a
+    coarse panel (the velocity of a smooth shape), so the panel's Lagrange interpolant
+    carries them."""
+    J = coarse_state.get("jacobian")
+    if (J is None or coarse.area_mode != op.area_mode
+            or not np.array_equal(coarse.density, op.density)):
+        return {}
+    p = coarse.p
+    tn, _ = gauss_legendre(p)
+    bw = barycentric_weights(p)
+    br = coarse.breaks
+    t = op.tau.ravel()
+    i = np.clip(np.searchsorted(br, t, side="right") - 1, 0, br.size - 2)
+    s = 2.0 * (t - br[i]) / (br[i + 1] - br[i]) - 1.0
+    d = s[:, None] - tn[None, :]
+    hit = d == 0.0
+    d[hit] = 1.0
+    L = bw / d
+    L[hit.any(axis=1)] = hit[hit.any(axis=1)]
+    L /= L.sum(axis=1, keepdims=True)
+    cols = i[:, None] * p + np.arange(p)
+    sw_c = np.repeat(np.sqrt(coarse_state["panels"].w.ravel()), 2)
+    sw_f = np.repeat(np.sqrt(state["panels"].w.ravel()), 2)
+    G = J / sw_c[:, None]                                   # unweighted rows
+    Gf = np.empty((sw_f.size, J.shape[1]))
+    for a in (0, 1):                                        # x rows, r rows
+        Gf[a::2] = np.einsum("ik,ikj->ij", L, G[a::2][cols])
+    Gf *= sw_f[:, None]
+    free_c = [m for m in range(coarse.disc.n_modes) if m not in coarse._dependent()]
+    free_f = [m for m in range(op.disc.n_modes) if m not in op._dependent()]
+    where = {m: j for j, m in enumerate(free_c)}
+    return {jf: Gf[:, where[m]] for jf, m in enumerate(free_f) if m in where}
+
+
 def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, max_iter,
-                 seed_level=False, valley=False, carrier=False, deadline=None):
+                 seed_level=False, valley=False, carrier=False, deadline=None, coarse=None):
     """Levenberg–Marquardt at one resolution from ``seed``
     (:func:`bem.newton.valley_levenberg_marquardt` if ``valley``, with 8 ``max_iter`` cheap
-    iterations, else :func:`bem.newton.levenberg_marquardt`); returns (state, op, info).
-    ``seed_level``: the first level of a ladder (a smaller Jacobian budget); ``carrier``: a
-    valley level that only seeds the next one (one difference Jacobian)."""
+    iterations, else :func:`bem.newton.levenberg_marquardt`); returns (state, op, info), the
+    state with the final Jacobian. ``seed_level``: the first level of a ladder (a smaller
+    Jacobian budget); ``carrier``: a valley level that only seeds the next one (one difference
+    Jacobian). ``coarse``: (op, state) of the level below (plain method only): its Jacobian,
+    interpolated to this level's nodes, gives the columns of the modes it has, and only the
+    new modes are differenced (:func:`_prolonged_columns`)."""
     ref = fit_curve(seed.sample, 0.0, 1.0, disc.n_modes, density=seed.density) \
         if seed.n_modes != disc.n_modes else seed
     op = VesicleOperator(nu, lam, ca_b, disc, ref, n_tension)
@@ -406,12 +458,25 @@ def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, m
                                          max_iter=8 * max_iter, deadline=deadline,
                                          max_jacobians=1 if carrier else 2 if seed_level else 4)
     else:
-        rep = levenberg_marquardt(fun, op.free(template), tol=xtol, max_iter=max_iter,
+        z0, start, J0, extra = op.free(template), None, None, 0
+        if coarse is not None and not (deadline is not None and deadline.expired()):
+            try:
+                start, extra = fun(z0), 1
+            except InvalidParameterError:                # reported by levenberg_marquardt
+                start = None
+            known = _prolonged_columns(*coarse, op, start[1]) if start else {}
+            if known:
+                J0, n = difference_jacobian(fun, z0, start[0], 1e-7, known)
+                extra += n
+        rep = levenberg_marquardt(fun, z0, tol=xtol, max_iter=max_iter,
                                   max_jacobians=3 if seed_level else 8, deadline=deadline,
-                                  stall=0.9 if seed_level else None, floor_ratio=0.99)
+                                  stall=0.9 if seed_level else None, floor_ratio=0.99,
+                                  start=start, jacobian=J0)
+        rep.evaluations += extra
     if rep.payload is None:
         raise InvalidParameterError("initial", "a shape rejected by the operator", rep.message)
     state = rep.payload
+    state["jacobian"] = rep.jacobian
     info = {"success": rep.success, "message": rep.message, "iterations": rep.iterations,
             "evaluations": rep.evaluations, "jacobians": rep.jacobians,
             "norm0": rep.history[0], "norm": rep.history[-1], "area_mode": op.area_mode}
@@ -532,6 +597,7 @@ def check_vesicle_inputs(nu, lam=None, *, lam_ratio=None, ca_b=50.0, n_modes=Non
             density_terms, max_iter)
 
 
+@single_threaded_blas()      # small dense products between numba loops (bem.threads)
 def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | None = None,
                   ca_b: float = 50.0, initial=None, n_modes: int | None = None,
                   tol: float = 1e-4, residual_tol: float = 1e-4, max_modes: int | None = None,
@@ -731,7 +797,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             st, op, info = _solve_level(nu, lam, ca_b, disc, prev, n, xtol=xtol,
                                         max_iter=max_iter, seed_level=not levels,
                                         valley=valley, carrier=i < pair_from,
-                                        deadline=deadline)
+                                        deadline=deadline,
+                                        coarse=(levels[-1][1], levels[-1][0]) if levels else None)
         except InvalidParameterError as exc:
             message = f"level with {n} modes: {exc}"
             break
@@ -815,6 +882,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         tension_modes=np.asarray(st["g"]).copy(), **prof)
 
 
+@single_threaded_blas()
 def mode_convergence(result, modes, *, density: str | None = "bend", density_terms: int = 16,
                      xtol: float = 1e-9, max_iter: int = 40, progress=None) -> list[dict]:
     r"""Mesh-convergence study of a steady vesicle at a *fixed* parametrisation density.
