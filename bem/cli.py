@@ -274,15 +274,16 @@ def cmd_bem_vesicle_sweep(args):
     done = []
 
     def report(i, n, res, seconds):
-        """One line per point on stderr (not with --json); with --out the points so far."""
+        """With --out the points so far (saved first: an interrupted sweep keeps its finished
+        points), then one line per point on stderr (not with --json)."""
         done.append(res)
+        if args.out and i < n:
+            save_sweep(args.out, sorted(done, key=lambda r: r.lam), solver, profiles=False,
+                       complete=False)
         if not args.json:
             print(f"point {i}/{n}: lam = {res.lam:.6g} (lam/lam_c = {res.lam_ratio:.4f}) "
                   f"{'converged' if res.success else 'NOT CONVERGED'} in {seconds:.1f} s",
                   file=sys.stderr, flush=True)
-        if args.out and i < n:          # an interrupted sweep keeps its finished points
-            save_sweep(args.out, sorted(done, key=lambda r: r.lam), solver, profiles=False,
-                       complete=False)
 
     results = sweep_vesicle(args.nu, **points, ca_b=args.ca_b, progress=report,
                             max_time=args.max_time, **solver)
