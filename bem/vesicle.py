@@ -29,7 +29,10 @@ Method:
   so the nonlinear unknowns are the N - 2 free shape modes.
 * the weighted residual :math:`\sqrt{w_i}(u_i - V e_x)` (both components) is minimised by
   Levenberg–Marquardt with a forward-difference Jacobian and Broyden updates
-  (:func:`bem.newton.levenberg_marquardt`, shared with the drop); its floor falls spectrally
+  (:func:`bem.newton.levenberg_marquardt`, shared with the drop; a level above the first
+  starts from the level below's Jacobian interpolated to its nodes and differences only its new
+  modes, :func:`_prolonged_columns`: at (0.9, 1.0) 57 BEM evaluations instead of 113, outputs
+  within 3e-8 of the fresh-Jacobian minimum); its floor falls spectrally
   with N, and the refinement pair gives the error estimate. Long vesicles near lam_c have a
   slow, strongly curved valley of |F| (volume moved between the caps through the thin film);
   they use :func:`bem.newton.valley_levenberg_marquardt` (directional Jacobian updates,

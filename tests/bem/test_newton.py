@@ -62,3 +62,32 @@ def test_valley_solver_reports_an_invalid_start_and_recovers_from_invalid_trials
                                      max_jacobians=10)
     assert rep.success, rep.message
     assert np.allclose(rep.z, _reference(z0), atol=1e-6)
+
+
+
+def test_supplied_jacobian_reaches_the_minimiser_without_a_difference_jacobian():
+    """levenberg_marquardt started with an accurate approximate Jacobian (as the vesicle's
+    levels get from the coarser level) keeps it while its steps contract and stops at the
+    least-squares minimiser (non-zero residual) without a difference Jacobian."""
+    from bem.newton import levenberg_marquardt
+
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((14, 5))
+    b = A @ rng.standard_normal(5) + 1e-3 * rng.standard_normal(14)   # a small residual floor
+
+    def F(z):
+        r = A @ z - b
+        return r + 0.05 * r**2
+
+    def jac(z):
+        return (1.0 + 0.1 * (A @ z - b))[:, None] * A
+
+    z_ref = least_squares(F, np.zeros(5), jac=jac, xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+    z0 = z_ref + 1e-3 * np.arange(1, 6)
+    J0 = jac(z0) * (1.0 + 1e-3 * np.cos(np.arange(14)))[:, None]
+    rep = levenberg_marquardt(lambda z: (F(z), None), z0, jacobian=J0, floor_ratio=0.99)
+    assert rep.success, rep.message
+    assert rep.jacobians == 0 and rep.evaluations <= z0.size, rep
+    # the fixed point of steps with a Jacobian 1e-3 off lies ~1e-7 from the minimiser
+    np.testing.assert_allclose(rep.z, z_ref, atol=1e-6)
+    assert rep.jacobian is not None and rep.jacobian.shape == J0.shape

@@ -364,3 +364,40 @@ def test_mode_convergence_is_geometric_at_nu_0p6_lam_1p94():
     assert rows[1]["residual"] < rows[0]["residual"] / 1.5
     assert rows[2]["residual"] < rows[1]["residual"] / 1.5
     assert abs(last["dp_plus_R0"] - rows[1]["dp_plus_R0"]) < 1e-4 * last["dp_plus_R0"]
+
+
+def test_prolonged_jacobian_columns_match_difference_columns():
+    """The coarse level's Jacobian interpolated to the next level's nodes (the start of every
+    level above the first) agrees with the difference Jacobian there, column by column."""
+    from bem.newton import difference_jacobian
+    from bem.shape import fit_curve
+    from bem.vesicle import (
+        VesicleOperator,
+        _prolonged_columns,
+        lubrication_seed,
+        vesicle_discretisation,
+    )
+
+    seed, _ = lubrication_seed(0.9, 1.0, 50.0, 24)
+    ops, states, jacs = [], [], []
+    for n in (16, 24):
+        ref = fit_curve(seed.sample, 0.0, 1.0, n)
+        op = VesicleOperator(0.9, 1.0, 50.0, vesicle_discretisation(n), ref)
+        template = op.curve(ref.modes).modes.copy()
+
+        def fun(z, op=op, template=template):
+            st = op.evaluate(op.curve(op.full(z, template)))
+            return st["F"], st
+
+        z0 = op.free(template)
+        F0, st0 = fun(z0)
+        J, _ = difference_jacobian(fun, z0, F0, 1e-7, {})
+        st0["jacobian"] = J
+        ops.append(op)
+        states.append(st0)
+        jacs.append(J)
+    cols = _prolonged_columns(ops[0], states[0], ops[1], states[1])
+    assert sorted(cols) == list(range(len(cols))) and len(cols) == jacs[0].shape[1]
+    scale = np.linalg.norm(jacs[1], axis=0).max()
+    err = max(np.linalg.norm(c - jacs[1][:, j]) for j, c in cols.items()) / scale
+    assert err < 0.05, err
