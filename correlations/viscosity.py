@@ -508,6 +508,16 @@ def relative_viscosity(diameter_um, discharge_hematocrit, law="pries1992"):
     return _LAW_FUNCTIONS[law](diameter_um, discharge_hematocrit)
 
 
+def _checked_ratio(caller, diameter_um, discharge_hematocrit, constants):
+    """Inputs of a Fåhræus function checked (warning outside the fit's data range, named after
+    ``caller``); returns (H_D, H_T/H_D) as arrays."""
+    check_choice("constants", constants, tuple(FAHRAEUS_CONSTANTS))
+    d = _check_fahraeus_diameter(diameter_um, constants)
+    hd = check_fraction("discharge_hematocrit", discharge_hematocrit)
+    FAHRAEUS_RANGE.warn_outside(caller, stacklevel=4, diameter_um=d, discharge_hematocrit=hd)
+    return hd, _fahraeus_ratio(d, hd, constants)
+
+
 def hematocrit_ratio_fahraeus(diameter_um, discharge_hematocrit, constants="pries1990"):
     r"""Fåhræus ratio :math:`H_T/H_D = H_D + (1 - H_D)x` (see :func:`tube_hematocrit_fahraeus`).
 
@@ -533,12 +543,8 @@ def hematocrit_ratio_fahraeus(diameter_um, discharge_hematocrit, constants="prie
     >>> round(hematocrit_ratio_fahraeus(10.0, 0.45, constants="pries1992"), 4)
     0.7296
     """
-    check_choice("constants", constants, tuple(FAHRAEUS_CONSTANTS))
-    d = _check_fahraeus_diameter(diameter_um, constants)
-    hd = check_fraction("discharge_hematocrit", discharge_hematocrit)
-    FAHRAEUS_RANGE.warn_outside("hematocrit_ratio_fahraeus", diameter_um=d,
-                                discharge_hematocrit=hd)
-    return scalar_or_array(_fahraeus_ratio(d, hd, constants))
+    return scalar_or_array(_checked_ratio("hematocrit_ratio_fahraeus", diameter_um,
+                                          discharge_hematocrit, constants)[1])
 
 
 def tube_hematocrit_fahraeus(diameter_um, discharge_hematocrit, constants="pries1990"):
@@ -582,13 +588,10 @@ def tube_hematocrit_fahraeus(diameter_um, discharge_hematocrit, constants="pries
     >>> round(tube_hematocrit_fahraeus(10.0, 0.45, constants="pries1992"), 4)
     0.3283
     """
-    check_choice("constants", constants, tuple(FAHRAEUS_CONSTANTS))
-    d = _check_fahraeus_diameter(diameter_um, constants)
-    hd = check_fraction("discharge_hematocrit", discharge_hematocrit)
-    FAHRAEUS_RANGE.warn_outside("tube_hematocrit_fahraeus", diameter_um=d,
-                                discharge_hematocrit=hd)
+    hd, ratio = _checked_ratio("tube_hematocrit_fahraeus", diameter_um, discharge_hematocrit,
+                               constants)
     # x <= 1 for D > D*, so H_T/H_D = H_D + (1 - H_D) x <= 1: H_T <= H_D to the last bit.
-    return scalar_or_array(hd * _fahraeus_ratio(d, hd, constants))
+    return scalar_or_array(hd * ratio)
 
 
 def discharge_hematocrit_fahraeus(diameter_um, tube_hematocrit, constants="pries1990"):
