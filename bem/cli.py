@@ -21,7 +21,6 @@ physical number.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import math
 import sys
@@ -37,18 +36,10 @@ _OPTIONS = {"lam": "--lam", "lam_ratio": "--lam-ratio", "lams": "--lam", "lam_ra
             "max_modes": "--max-modes", "max_time": "--max-time"}
 
 
-@contextlib.contextmanager
 def _options_named():
-    """Turn an InvalidParameterError of an input check into a UsageError naming the option."""
-    from lubrication.checks import InvalidParameterError
-    from lubrication.cli_contract import UsageError
-    try:
-        yield
-    except InvalidParameterError as exc:
-        option = _OPTIONS.get(exc.name)
-        if option is None:
-            raise
-        raise UsageError(f"{option}: {exc}") from None
+    """Input-check errors name the option (:func:`lubrication.cli_contract.options_named`)."""
+    from lubrication.cli_contract import options_named
+    return options_named(_OPTIONS)
 
 
 def _missing_if_failed(value, converged: bool):

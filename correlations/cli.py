@@ -14,15 +14,14 @@ from __future__ import annotations
 import argparse
 import sys
 import warnings
-from contextlib import contextmanager
 
 from lubrication.checks import (InvalidParameterError, OutOfRangeWarning, check_fraction,
                                 check_positive, check_range)
 from lubrication.cli_contract import (EXIT_INTERRUPTED, EXIT_INVALID, EXIT_NOT_CONVERGED, EXIT_OK,
                                       Parser, UsageError, check_output_dir, check_plot_path,
                                       dump_json, format_rows, interrupted_message,
-                                      non_finite_keys, one_line, quiet_broken_pipe,
-                                      save_plot)
+                                      non_finite_keys, one_line, options_named,
+                                      quiet_broken_pipe, save_plot)
 
 # Human labels of the output keys (key -> label); keys not listed are printed as they are. A
 # label names the quantity; the "unit" column says what its value is measured in (below).
@@ -66,21 +65,10 @@ OPTIONS = {
 }
 
 
-@contextmanager
 def _options(args, **renamed):
-    """Re-raise an :class:`InvalidParameterError` of the library as a usage error that starts
-    with the command-line option behind the parameter (``--velocity-mm-s: velocity_mm_s=...``),
-    marked "(default)" when the user did not type it. ``renamed`` maps further parameter names
-    to options (``tube_hematocrit="--hematocrit"``)."""
-    try:
-        yield
-    except InvalidParameterError as exc:
-        option = renamed.get(exc.name) or OPTIONS.get(exc.name)
-        if option is None:
-            raise
-        dest = option.lstrip("-").replace("-", "_")
-        typed = getattr(args, dest, None) is not None
-        raise UsageError(f"{option}{'' if typed else ' (default)'}: {exc}") from None
+    """:func:`lubrication.cli_contract.options_named` with this module's :data:`OPTIONS`
+    (``renamed``: further parameter names, e.g. ``tube_hematocrit="--hematocrit"``)."""
+    return options_named({**OPTIONS, **renamed}, args)
 
 
 def _quantity_rows(quantities: dict, keys) -> list:

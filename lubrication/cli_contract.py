@@ -20,6 +20,7 @@ This module sits below the three packages (it imports only the standard library 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -35,7 +36,7 @@ EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 130, 141
 __all__ = ["EXIT_OK", "EXIT_NOT_CONVERGED", "EXIT_INVALID", "EXIT_INTERRUPTED",
            "EXIT_BROKEN_PIPE", "UsageError", "Parser", "format_rows", "format_value",
            "check_output_dir", "check_plot_path", "save_plot", "non_finite_keys", "dump_json",
-           "finite_float", "positive_int", "add_max_time_option", "one_line"]
+           "finite_float", "positive_int", "add_max_time_option", "one_line", "options_named"]
 
 
 class UsageError(Exception):
@@ -53,6 +54,27 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message):
         self.exit(EXIT_INVALID, f"{one_line(self.prog)}: error: {one_line(message)}\n")
+
+
+# --------------------------------------------------------------------------- option names
+
+@contextlib.contextmanager
+def options_named(options: dict, args=None):
+    """Re-raise an :class:`~lubrication.checks.InvalidParameterError` of the library as a
+    :class:`UsageError` that starts with the command-line option behind the parameter
+    (``options``: parameter name -> option, e.g. ``{"velocity_mm_s": "--velocity-mm-s"}``),
+    marked "(default)" when ``args`` shows the user did not type it. Parameters not in
+    ``options`` propagate unchanged (their message names the parameter)."""
+    from .checks import InvalidParameterError
+    try:
+        yield
+    except InvalidParameterError as exc:
+        option = options.get(exc.name)
+        if option is None:
+            raise
+        dest = option.lstrip("-").replace("-", "_")
+        default = args is not None and getattr(args, dest, None) is None
+        raise UsageError(f"{option}{' (default)' if default else ''}: {exc}") from None
 
 
 # --------------------------------------------------------------------------- option types
