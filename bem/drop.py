@@ -93,6 +93,7 @@ from .quadrature import (
     panels_on_curve,
 )
 from .shape import SpectralCurve, equidistributing_density, fit_curve
+from .threads import single_threaded_blas
 
 __all__ = ["CA_MAX", "CA_MIN", "LAM_MIN", "MAX_MODES", "DropDiscretisation", "DropOperator",
            "DropState", "NewtonReport", "check_drop_inputs", "find_seed", "newton_drop",
@@ -619,6 +620,7 @@ def _profile(curve: SpectralCurve, n: int = 201) -> dict:
             "kappa2": k2}
 
 
+@single_threaded_blas()      # small dense products between numba loops (bem.threads)
 def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float = 1e-5,
                residual_tol: float = 1e-4, max_modes: int = 64, order: int = DEFAULT_ORDER,
                initial=None, density_terms: int = 16, max_time: float | None = None):
