@@ -42,11 +42,6 @@ def _options_named():
     return options_named(_OPTIONS)
 
 
-def _missing_if_failed(value, converged: bool):
-    """A physical number for a table: None (printed "—") when the solve failed."""
-    return value if converged else None
-
-
 def cmd_bem_sphere(args):
     """Free rigid sphere of radius lam R on the axis of Poiseuille flow."""
     from lubrication.cli_contract import format_rows
@@ -60,25 +55,22 @@ def cmd_bem_sphere(args):
     out = {"command": "bem", "subcommand": "sphere"}
     out.update(res.to_dict())
     out["converged"] = ok
-    out["error_estimate"] = {"V_over_U": res.V_over_U_err, "dp_plus_R": res.dp_plus_R_err,
-                             "dp_plus_R0": res.dp_plus_R_err * res.lam, "drag_K": res.drag_K_err}
+    errors = {"V_over_U": res.V_over_U_err, "dp_plus_R": res.dp_plus_R_err,
+              "dp_plus_R0": res.dp_plus_R_err * res.lam, "drag_K": res.drag_K_err}
+    out["error_estimate"] = {k: (v if math.isfinite(v) else None) for k, v in errors.items()}
     for key in ("V_over_U_err", "dp_plus_R_err", "drag_K_err"):
         out.pop(key, None)
-    out["error_estimate"] = {k: (v if math.isfinite(v) else None)
-                             for k, v in out["error_estimate"].items()}
     method = f"BEM, {res.panels['body']} panels x {res.panels['order']} nodes"
 
     def pm(err):
         return f"± {err:.1e}" if ok and math.isfinite(err) else ""
     rows = [("confinement a/R", res.lam, "-", "input", ""),
-            ("speed V", _missing_if_failed(res.V_over_U, ok), "U", method,
-             pm(res.V_over_U_err)),
-            ("extra pressure drop dp+", _missing_if_failed(res.dp_plus_R, ok), "eta U/R",
-             method, pm(res.dp_plus_R_err)),
-            ("extra pressure drop dp+", _missing_if_failed(res.dp_plus_R0, ok), "eta U/a",
-             method, ""),
-            ("quiescent-tube drag K = F/(6 pi eta a V)", _missing_if_failed(res.drag_K, ok), "-",
-             method, pm(res.drag_K_err)),
+            ("speed V", out["V_over_U"], "U", method, pm(res.V_over_U_err)),
+            ("extra pressure drop dp+", out["dp_plus_R"], "eta U/R", method,
+             pm(res.dp_plus_R_err)),
+            ("extra pressure drop dp+", out["dp_plus_R0"], "eta U/a", method, ""),
+            ("quiescent-tube drag K = F/(6 pi eta a V)", out["drag_K"], "-", method,
+             pm(res.drag_K_err)),
             ("time", res.timings.get("total_s"), "s", "", ""),
             ("converged", ok, "", "", "" if ok else res.message)]
     _plot_shape(res, args)
@@ -131,20 +123,18 @@ def cmd_bem_drop(args):
     out = _shape_result_json(res, "drop", args)
     method, pm = _method_and_error(res)
     ok = bool(res.success)
-
-    def phys(v):
-        return _missing_if_failed(v, ok)
+    # physical numbers from out: the result's to_dict gives None for them after a failed solve
     rows = [("confinement lam = R0/R", res.lam, "-", "input", ""),
             ("capillary number Ca = eta U/gamma", res.ca, "-", "input", ""),
-            ("speed V", phys(res.V_over_U), "U", method, pm("V_over_U")),
-            ("extra pressure drop dp+", phys(res.dp_plus_R), "eta U/R", method,
+            ("speed V", out["V_over_U"], "U", method, pm("V_over_U")),
+            ("extra pressure drop dp+", out["dp_plus_R"], "eta U/R", method,
              pm("dp_plus_R")),
-            ("extra pressure drop dp+", phys(res.dp_plus_R0), "eta U/R0", method,
+            ("extra pressure drop dp+", out["dp_plus_R0"], "eta U/R0", method,
              pm("dp_plus_R0")),
-            ("drop length L", phys(res.length), "R", method, ""),
-            ("smallest gap 1 - max r", phys(res.film), "R", method, ""),
-            ("front curvature", phys(res.curvature_front), "1/R", method, ""),
-            ("rear curvature", phys(res.curvature_rear), "1/R", method, ""),
+            ("drop length L", out["length"], "R", method, ""),
+            ("smallest gap 1 - max r", out["film"], "R", method, ""),
+            ("front curvature", out["curvature_front"], "1/R", method, ""),
+            ("rear curvature", out["curvature_rear"], "1/R", method, ""),
             ("steady residual max|u.n - V n_x|", res.residual, "U", method, ""),
             ("volume error", res.volume_error, "-", "panel quadrature", ""),
             ("time", res.timings.get("total_s"), "s", "", ""),
@@ -173,24 +163,22 @@ def cmd_bem_vesicle(args):
     out = _shape_result_json(res, "vesicle", args)
     method, pm = _method_and_error(res)
     ok = bool(res.success)
-
-    def phys(v):
-        return _missing_if_failed(v, ok)
+    # physical numbers from out: the result's to_dict gives None for them after a failed solve
     curv = (f"{res.curvature_rear:.4g} / {res.curvature_front:.4g}" if ok else None)
     rows = [("reduced volume nu", res.nu, "-", "input", ""),
             ("confinement lam = R0/R", res.lam, "-", "input", f"lam/lam_c = {res.lam_ratio:.4g}"),
             ("bending capillary number Ca_B = eta U R0^2/kappa", res.ca_b, "-", "input", ""),
-            ("speed V", phys(res.V_over_U), "U", method, pm("V_over_U")),
-            ("extra pressure drop dp+", phys(res.dp_plus_R0), "eta U/R0", method,
+            ("speed V", out["V_over_U"], "U", method, pm("V_over_U")),
+            ("extra pressure drop dp+", out["dp_plus_R0"], "eta U/R0", method,
              pm("dp_plus_R0")),
-            ("length L", phys(res.ell), "R", method, ""),
-            ("smallest gap h", phys(res.film_min), "R", method, ""),
-            ("largest tension gamma_max", phys(res.tension_max), "eta U", method,
+            ("length L", out["ell"], "R", method, ""),
+            ("smallest gap h", out["film_min"], "R", method, ""),
+            ("largest tension gamma_max", out["tension_max"], "eta U", method,
              pm("tension_max")),
-            ("largest wall shear stress tau_w (= shear rate x eta)", phys(res.wall_shear_max),
+            ("largest wall shear stress tau_w (= shear rate x eta)", out["wall_shear_max"],
              "eta U/R", method, "Poiseuille: 4"),
             ("rear / front curvature (neg. convex)", curv, "1/R", method, ""),
-            ("shape class", phys(res.shape_class) or None, "", method, ""),
+            ("shape class", out["shape_class"] or None, "", method, ""),
             ("steady residual max|u - V e_x|", res.residual, "U", method, ""),
             ("volume / area error", f"{res.volume_error:.1e} / {res.area_error:.1e}"
              if math.isfinite(res.volume_error) else None, "-", "panel quadrature", ""),

@@ -208,12 +208,8 @@ def format_rows(rows, title: str = "") -> str:
 
 
 def _plain(x):
-    """numpy scalars and arrays as Python numbers and lists, paths as strings."""
-    if hasattr(x, "tolist"):
-        return x.tolist()
-    if isinstance(x, Path):
-        return str(x)
-    return str(x)
+    """numpy scalars and arrays as Python numbers and lists, anything else (paths) as text."""
+    return x.tolist() if hasattr(x, "tolist") else str(x)
 
 
 def non_finite_keys(obj, prefix: str = "") -> list[str]:
