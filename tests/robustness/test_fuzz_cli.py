@@ -18,20 +18,16 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-import re
 import signal
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from probe_campaign import MODEL_NAMES, NON_FINITE, PHYSICAL_KEYS  # the same contract checks
+
 from correlations.cli import main
 
-PHYSICAL_KEYS = ("V_over_U", "dp_plus_R0", "dp_plus_R", "film_min", "film", "ell", "tension_max",
-                 "tension_front", "drag_K", "length", "wall_shear_max")
-NON_FINITE = re.compile(r"(?<![\w-])(-?inf(inity)?|nan)(?![\w-])", re.IGNORECASE)
-# Ca_B = inf names the high-Ca lubrication model: a model, not a computed number
-MODEL_NAMES = re.compile(r"Ca_B = inf|inf \(high-Ca model\)")
 TIME_LIMIT_S = 20          # per example; a solver command also gets --max-time (below)
 
 
