@@ -34,13 +34,16 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--nu", type=float, default=0.6, help="reduced volume (default 0.6)")
     ap.add_argument("--lam", type=float, default=1.94, help="confinement R0/R (default 1.94)")
+    ap.add_argument("--lam-ratio", type=float, help="lam/lam_c instead of --lam")
     ap.add_argument("--ca-b", type=float, default=50.0, help="Ca_B = eta U R0^2/kappa (50)")
     ap.add_argument("--modes", default="56,64,72,80", help="levels, comma separated")
     ap.add_argument("--json", help="write parameters and rows to this JSON file")
     args = ap.parse_args()
     modes = [int(m) for m in args.modes.split(",")]
     t0 = time.perf_counter()
-    base = solve_vesicle(args.nu, args.lam, ca_b=args.ca_b)
+    lam = None if args.lam_ratio else args.lam
+    base = solve_vesicle(args.nu, lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b)
+    print(f"  {base.message} ({base.bie_solves} BIE solves)", flush=True)
     print(f"default solve: {base.panels.get('modes')} modes, V/U {base.V_over_U:.7f}, "
           f"dp+R0 {base.dp_plus_R0:.5f}, g_max {base.tension_max:.3f}, residual "
           f"{base.residual:.1e}, {time.perf_counter() - t0:.0f} s", flush=True)
@@ -49,9 +52,11 @@ def main() -> None:
     rows = mode_convergence(base, modes, progress=lambda r: print(_fmt(r), flush=True))
     if args.json:
         out = Path(args.json)
-        doc = {"nu": args.nu, "lam": args.lam, "ca_b": args.ca_b, "modes": modes,
+        doc = {"nu": args.nu, "lam": base.lam, "ca_b": args.ca_b, "modes": modes,
                "density": "bend, built on the default solve's shape", "rows": rows,
-               "default_solve": base.to_dict(shape=False), "provenance": provenance()}
+               "default_solve": base.to_dict(shape=False),
+               "default_levels": base.refinement, "default_seconds": time.perf_counter() - t0,
+               "provenance": provenance()}
         atomic_write(out, lambda f: json.dump(doc, f, indent=1, default=str))
 
 
