@@ -382,6 +382,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_lubrication(sub)
     from bem.cli import add_bem_parser                          # light: numba loads on use
     add_bem_parser(sub)
+    from .map_cli import add_map_parser; add_map_parser(sub)   # light: solvers load on use
     return p
 
 

@@ -1,0 +1,457 @@
+r"""Build the solution map: solve every grid point, store it, resume, run in parallel.
+
+Scalings as in :mod:`correlations.solution_map` (ν, λ/λc, Ca_B = ηUR0²/κ, Δp⁺R0/(ηU), ...).
+
+Method
+------
+The grid (:data:`DEFAULT_GRID`, overridable) is cut into *lines* (method, ν, Ca_B); a line's
+points are solved in increasing λ/λc, each started from the last converged point before it (BEM:
+``initial=`` that shape; lubrication: ``initial=`` that result), the direction
+:mod:`bem.sweep` recommends. Every finished point, converged or failed, is written at once as
+its own JSON file (:func:`correlations.solution_map.point_filename`) through
+:func:`lubrication.io.atomic_write`, so a killed build leaves only complete files. A restarted
+build skips the stored points of each line and warm-starts from the last converged *stored*
+shape (BEM: the spectral ``modes`` and ``density`` of the point, rebuilt with
+:meth:`bem.shape.SpectralCurve.closed` at the new volume; lubrication stores no solver state and
+cold-starts, which costs about a second).
+
+Lines are independent tasks: by default a local :class:`concurrent.futures.ProcessPoolExecutor`
+(``workers`` processes; ``workers=1`` solves in this process), or a Dask distributed cluster
+(``scheduler`` = its address). With Dask the workers write the point files into the build
+folder (a file system they share with the client, as on a cluster); the client also writes any
+point a finished line returns that is not yet on disk.
+
+Resource envelope: a point takes 0.1–3 s (lubrication) to minutes (BEM near λc); ``max_time``
+bounds each point (an expired point is stored as failed with the reason). The default grid has
+9 ν × (10 BEM + 11 lubrication λ/λc) × 4 Ca_B = 756 points in 72 lines.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import logging
+import math
+import os
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+from lubrication.checks import InvalidParameterError, check_range
+from lubrication.io import atomic_write
+
+from .solution_map import POINT_FORMAT, QUANTITIES, pack_map, point_filename, read_points
+
+__all__ = ["DEFAULT_GRID", "DEFAULT_OPTIONS", "METHODS", "SOLVERS", "make_grid", "line_tasks",
+           "solve_line", "build_map"]
+
+log = logging.getLogger(__name__)
+
+METHODS = ("bem", "lubrication")
+
+#: The minimum grid the product needs. The BEM and lubrication λ/λc lists overlap at 0.9–0.98
+#: on purpose: the overlap measures where lubrication becomes accurate (the model error of the
+#: map's lubrication values, :mod:`correlations.solution_map`).
+DEFAULT_GRID = {
+    "methods": list(METHODS),
+    "nu": [0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95, 0.98],
+    "lam_ratio": {"bem": [0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98],
+                  "lubrication": [0.9, 0.92, 0.94, 0.95, 0.96, 0.97, 0.98, 0.99, 0.995, 0.999,
+                                  0.9999]},
+    "ca_b": [5.0, 15.0, 50.0, 500.0],
+}
+
+#: Solver options per method (keyword arguments of solve_vesicle / solve_lubrication); the
+#: empty BEM set means its automatic refinement to tol = residual_tol = 1e-4.
+DEFAULT_OPTIONS = {"bem": {}, "lubrication": {"tol": 1e-7}}
+
+
+# --------------------------------------------------------------------------- grid
+
+def make_grid(nu=None, lam_ratio=None, ca_b=None, methods=None) -> dict:
+    """The build grid: :data:`DEFAULT_GRID` with the given lists replacing its own.
+
+    ``lam_ratio`` is a list (the same λ/λc for every method) or a dict ``{method: list}``.
+    Values are checked (0 < ν < 1, 0 < λ/λc < 1, Ca_B > 0, methods from :data:`METHODS`),
+    sorted and de-duplicated.
+    """
+    methods = list(DEFAULT_GRID["methods"] if methods is None else methods)
+    if not methods:
+        raise InvalidParameterError("methods", "[]", "one or more of " + ", ".join(METHODS))
+    for m in methods:
+        if m not in METHODS:
+            raise InvalidParameterError("methods", m, "one or more of " + ", ".join(METHODS))
+    methods = [m for m in METHODS if m in methods]
+
+    def values(name, given, default, lo, hi, hi_open=True):
+        v = default if given is None else given
+        arr = check_range(name, [float(x) for x in v], lo, hi, lo_open=True, hi_open=hi_open)
+        if arr.size == 0:
+            raise InvalidParameterError(name, "[]", "a non-empty list")
+        return sorted({float(x) for x in arr})
+
+    ratios = {}
+    for m in methods:
+        given = lam_ratio.get(m) if isinstance(lam_ratio, dict) else lam_ratio
+        ratios[m] = values("lam_ratio", given, DEFAULT_GRID["lam_ratio"][m], 0.0, 1.0)
+    return {"methods": methods,
+            "nu": values("nu", nu, DEFAULT_GRID["nu"], 0.0, 1.0),
+            "lam_ratio": ratios,
+            "ca_b": values("ca_b", ca_b, DEFAULT_GRID["ca_b"], 0.0, math.inf)}
+
+
+def line_tasks(grid: dict) -> list[tuple[str, float, float]]:
+    """The lines (method, ν, Ca_B) of a grid, BEM first (the long ones start first)."""
+    return [(m, nu, ca) for m in grid["methods"] for nu in grid["nu"] for ca in grid["ca_b"]]
+
+
+# --------------------------------------------------------------------------- one point
+
+def _now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+
+
+def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
+    """One BEM point. ``warm``: a VesicleResult or a stored record with a shape (or None).
+    Returns (record fields, the object to warm-start the next point from or None)."""
+    from bem.shape import SpectralCurve
+    from bem.vesicle import solve_vesicle
+    from lubrication.geometry import critical_confinement
+
+    initial = warm
+    if isinstance(warm, dict):
+        lam = lam_ratio * float(critical_confinement(nu))
+        initial = SpectralCurve.closed(warm["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
+                                       density=warm["shape"]["density"])
+    res = solve_vesicle(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial, max_time=max_time,
+                        **options)
+    d = res.to_dict(shape=False)
+    est = res.error_estimate if res.success else {}
+    fields = {"lam": d["lam"], "lam_c": d["lam_c"], "success": bool(res.success),
+              "message": res.message, **{q: d.get(q) for q in QUANTITIES},
+              "shape_class": d["shape_class"],
+              "error_estimate": {q: (None if est.get(q) is None or not math.isfinite(est[q])
+                                     else float(est[q])) for q in QUANTITIES},
+              "residual": d["residual"], "bie_solves": res.bie_solves, "seed": res.seed,
+              "shape": ({"modes": res.modes.tolist(), "density": res.density.tolist()}
+                        if res.success else None),
+              "solver": {"name": "bem.vesicle.solve_vesicle", "panels": d["panels"],
+                         "modes": int(res.modes.size),
+                         "refinement_modes": [lev[0] for lev in d["refinement"]],
+                         "tol": d["tol"], "residual_tol": d["residual_tol"],
+                         "options": options, "max_time": max_time}}
+    return fields, (res if res.success else None)
+
+
+def _solve_lubrication(nu, lam_ratio, ca_b, warm, options, max_time):
+    """One lubrication point (bending model at ``ca_b``). ``warm``: a LubricationResult or
+    None (stored records hold no solver state: cold start)."""
+    from lubrication.solve import solve_lubrication
+
+    initial = None if isinstance(warm, dict) else warm
+    try:
+        res = solve_lubrication(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial,
+                                max_time=max_time, **options)
+    except InvalidParameterError as exc:      # outside the model's domain: a failed point
+        return {"success": False, "message": f"outside the lubrication model: {exc}",
+                **dict.fromkeys(QUANTITIES), "shape_class": None,
+                "error_estimate": dict.fromkeys(QUANTITIES), "residual": None,
+                "bie_solves": None, "seed": "", "shape": None,
+                "solver": {"name": "lubrication.solve.solve_lubrication", "options": options,
+                           "max_time": max_time}}, None
+    d = res.to_dict()
+    wall = None
+    if res.success and len(res.shear_wall):
+        # under the vesicle from the model; Poiseuille flow (tau_w R/(eta U) = 4) elsewhere
+        wall = max(4.0, float(max(abs(float(v)) for v in res.shear_wall)))
+    fields = {"lam": d["lam"], "lam_c": d["lam_c"], "success": bool(res.success),
+              "message": res.message, **{q: d.get(q) for q in QUANTITIES},
+              "wall_shear_max": wall, "shape_class": d["shape_class"],
+              "error_estimate": dict.fromkeys(QUANTITIES), "residual": d["max_residual"],
+              "bie_solves": None, "seed": "previous point" if initial is not None else "cold",
+              "shape": None,
+              "solver": {"name": "lubrication.solve.solve_lubrication", "model": d["model"],
+                         "nodes": d["n_nodes"], "tol": d["tol"], "options": options,
+                         "max_time": max_time}}
+    return fields, (res if res.success else None)
+
+
+#: method -> point solver ``f(nu, lam_ratio, ca_b, warm, options, max_time) -> (fields, warm)``
+SOLVERS = {"bem": _solve_bem, "lubrication": _solve_lubrication}
+
+
+def _point(method, nu, lam_ratio, ca_b, warm, options, max_time, provenance):
+    """Solve one point and return (its record, the next warm start). A solver exception is a
+    failed point with the exception as reason (it is stored, not raised)."""
+    clock = time.perf_counter()
+    try:
+        fields, warm_next = SOLVERS[method](nu, lam_ratio, ca_b, warm, options, max_time)
+    except Exception as exc:        # noqa: BLE001 - stored as the failure reason
+        fields, warm_next = {"success": False, "message": f"{type(exc).__name__}: {exc}",
+                             **dict.fromkeys(QUANTITIES), "shape_class": None,
+                             "error_estimate": dict.fromkeys(QUANTITIES), "shape": None}, None
+    seconds = time.perf_counter() - clock
+    solver = fields.pop("solver", {})
+    record = {"format": POINT_FORMAT, "method": method, "nu": nu, "lam_ratio": lam_ratio,
+              "ca_b": ca_b, **fields, "seconds": seconds,
+              "provenance": {**provenance, "solver": solver, "date": _now()}}
+    return record, warm_next
+
+
+# --------------------------------------------------------------------------- one line
+
+def _ignore_sigint() -> None:
+    """Pool workers ignore Ctrl-C: the parent stops them (a terminal sends SIGINT to all)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def solve_line(folder, method, nu, ca_b, lam_ratios, stored, options, max_time, provenance,
+               parent_pid=None, on_point=None) -> list[dict]:
+    """Solve the missing points of one line (method, ν, Ca_B) in increasing λ/λc.
+
+    ``stored`` maps λ/λc to the records already stored (skipped; a converged BEM one is the
+    warm start of the next). Each new point is written to ``folder`` at once. Stops early if
+    the process's parent is no longer ``parent_pid`` (the build was killed). Returns the new
+    records.
+    """
+    folder = Path(folder)
+    warm, new = None, []
+    for r in sorted(lam_ratios):
+        if parent_pid is not None and os.getppid() != parent_pid:
+            break
+        done = stored.get(round(r, 9))
+        if done is not None:
+            if done.get("success"):
+                warm = done if done.get("shape") else None
+            continue
+        record, warm_next = _point(method, nu, r, ca_b, warm, options.get(method, {}),
+                                   max_time, provenance)
+        atomic_write(folder / point_filename(method, nu, r, ca_b),
+                     lambda f: json.dump(record, f, indent=1, allow_nan=False))
+        if warm_next is not None:
+            warm = warm_next
+        new.append(record)
+        if on_point is not None:
+            on_point(record)
+    return new
+
+
+# --------------------------------------------------------------------------- the build
+
+def _git_commit() -> str:
+    try:
+        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
+                             capture_output=True, text=True, timeout=5)
+        return out.stdout.strip() or "unknown"
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def _provenance() -> dict:
+    from bem.results import provenance
+    return {**provenance(), "git_commit": _git_commit()}
+
+
+def _connect(scheduler: str):
+    """A Dask client of the scheduler at ``scheduler``; InvalidParameterError if unreachable."""
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise InvalidParameterError("scheduler", scheduler, "the address of a Dask scheduler",
+                                    "dask.distributed is not installed (pip install "
+                                    "'vesicle-tube[distributed]')") from None
+    try:
+        return Client(scheduler, timeout="5s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise InvalidParameterError("scheduler", scheduler, "the address of a reachable Dask "
+                                    "scheduler", f"cannot connect ({exc})") from None
+
+
+def _stop(executor) -> None:
+    """Stop a process pool at once: cancel queued lines and terminate the running workers
+    (their finished points are complete files; the point being solved is lost)."""
+    executor.shutdown(wait=False, cancel_futures=True)
+    for proc in list(getattr(executor, "_processes", {}).values()):
+        proc.terminate()
+
+
+def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
+              max_time=None, retry_failed=False, progress=None, pack=True) -> dict:
+    """Build (or resume) the solution map in ``folder``; see the module docstring.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Build folder: ``build.json`` and one JSON file per finished point.
+    grid : dict, optional
+        From :func:`make_grid`. Default: the grid of an existing ``build.json`` (resume), else
+        :data:`DEFAULT_GRID`. A grid or options different from those of an existing
+        ``build.json`` are refused (start a new folder).
+    options : dict, optional
+        Solver options per method, merged over :data:`DEFAULT_OPTIONS`.
+    workers : int, optional
+        Local worker processes (default: the number of cores); 1 solves in this process.
+    scheduler : str, optional
+        Address of a Dask distributed scheduler; the lines run there instead.
+    max_time : float, optional
+        Wall-time budget of each point [s]; None: no limit.
+    retry_failed : bool
+        Solve again the points stored as failed (default: finished points are never recomputed).
+    progress : callable, optional
+        ``progress(state)`` with ``state`` = dict(done, total, failed, new, running, eta_s)
+        whenever a point is stored (at most every 0.5 s in parallel runs).
+    pack : bool
+        Pack the finished points into ``<folder>/solution_map.json`` at the end.
+
+    Returns
+    -------
+    dict
+        ``total``, ``done``, ``failed``, ``missing`` point counts, ``new`` (solved now),
+        ``seconds``, ``errors`` (lines that raised) and ``map`` (the packed file or None).
+    """
+    folder = Path(folder)
+    options = {m: {**DEFAULT_OPTIONS.get(m, {}), **(options or {}).get(m, {})} for m in METHODS}
+    if max_time is not None:
+        check_range("max_time", max_time, 0.0, math.inf, lo_open=True)
+    old = None
+    if (folder / "build.json").exists():
+        try:
+            old = json.loads((folder / "build.json").read_text(encoding="utf-8"))
+            old_grid = make_grid(old["grid"]["nu"], old["grid"]["lam_ratio"],
+                                 old["grid"]["ca_b"], old["grid"]["methods"])
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise InvalidParameterError("out", str(folder), "a new folder or a build folder of "
+                                        "'vesicle-tube map build'",
+                                        f"unreadable build.json ({exc})") from None
+        if grid is not None and grid != old_grid:
+            raise InvalidParameterError("out", str(folder), "a new folder, or the grid it was "
+                                        "built with", "it holds a build of another grid")
+        if old.get("parameters", {}).get("options") != json.loads(json.dumps(options)):
+            raise InvalidParameterError("out", str(folder), "a new folder, or the solver "
+                                        "options it was built with", "it holds a build with "
+                                        f"options {old['parameters'].get('options')}")
+        grid = old_grid
+    grid = grid or make_grid()
+    client = _connect(scheduler) if scheduler else None
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        if old is None:
+            info = {"grid": grid, "parameters": {"options": options, "max_time": max_time},
+                    "provenance": {**_provenance(), "created": _now()}}
+            atomic_write(folder / "build.json",
+                         lambda f: json.dump(info, f, indent=1, allow_nan=False))
+        provenance = old["provenance"] if old else info["provenance"]
+        provenance = {k: v for k, v in provenance.items() if k != "created"}
+        return _run(folder, grid, options, workers, client, max_time, retry_failed, progress,
+                    pack, provenance)
+    finally:
+        if client is not None:
+            client.close()
+
+
+def _run(folder, grid, options, workers, client, max_time, retry_failed, progress, pack,
+         provenance) -> dict:
+    started = time.monotonic()
+    stored: dict = {}
+    for p in read_points(folder):
+        if p["success"] or not retry_failed:
+            key = (p["method"], round(p["nu"], 9), round(p["ca_b"], 9))
+            stored.setdefault(key, {})[round(p["lam_ratio"], 9)] = p
+    total = sum(len(grid["lam_ratio"][m]) for m, _, _ in line_tasks(grid))
+    state = {"total": total, "new": 0, "failed": 0, "running": 0, "errors": []}
+
+    jobs = []
+    for method, nu, ca in line_tasks(grid):
+        have = stored.get((method, round(nu, 9), round(ca, 9)), {})
+        ratios = grid["lam_ratio"][method]
+        if any(round(r, 9) not in have for r in ratios):
+            jobs.append((method, nu, ca, ratios, have))
+    done_before = total - sum(sum(1 for r in j[3] if round(r, 9) not in j[4]) for j in jobs)
+
+    def report() -> None:
+        state["done"] = done_before + state["new"]
+        rate = state["new"] / max(time.monotonic() - started, 1e-9)
+        left = total - state["done"]
+        state["eta_s"] = left / rate if rate > 0 else None
+        if progress is not None:
+            progress({k: state[k] for k in ("done", "total", "failed", "new", "running",
+                                            "eta_s")})
+
+    state["failed"] = sum(1 for line in stored.values() for p in line.values()
+                          if not p["success"])
+    report()
+
+    def on_point(record) -> None:
+        state["new"] += 1
+        state["failed"] += not record["success"]
+        report()
+
+    args = (options, max_time, provenance)
+    if client is None and (workers or os.cpu_count() or 1) <= 1:
+        state["running"] = 1
+        for method, nu, ca, ratios, have in jobs:
+            solve_line(str(folder), method, nu, ca, ratios, have, *args, on_point=on_point)
+    else:
+        _parallel(folder, jobs, args, workers, client, state, report)
+    state["running"] = 0
+    packed = pack_map(folder) if pack else None
+    missing = total - done_before - state["new"]
+    return {"total": total, "done": total - missing, "failed": state["failed"],
+            "missing": missing, "new": state["new"], "errors": state["errors"],
+            "seconds": time.monotonic() - started, "map": str(packed) if packed else None}
+
+
+def _parallel(folder, jobs, args, workers, client, state, report) -> None:
+    """Run the line jobs on a process pool or a Dask client, polling the build folder for
+    progress; Ctrl-C stops the workers and propagates."""
+    executor = None
+    if client is None:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+        n = min(workers or os.cpu_count() or 1, max(len(jobs), 1))
+        executor = ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork"),
+                                       initializer=_ignore_sigint)
+        submit = executor.submit
+        parent = os.getpid()
+    else:
+        def submit(*a, **k):
+            return client.submit(*a, pure=False, **k)
+        parent = None
+    seen = {p.name for p in Path(folder).glob("*_nu*_lr*_caB*.json")}
+    pending: dict = {}
+    try:
+        pending = {submit(solve_line, str(folder), m, nu, ca, ratios, have, *args,
+                          parent_pid=parent): (m, nu, ca) for m, nu, ca, ratios, have in jobs}
+        while pending:
+            time.sleep(0.5)
+            finished = [f for f in pending if f.done()]
+            for f in finished:
+                line = pending.pop(f)
+                try:
+                    for record in f.result():
+                        path = Path(folder) / point_filename(record["method"], record["nu"],
+                                                             record["lam_ratio"], record["ca_b"])
+                        if not path.exists():
+                            atomic_write(path, lambda fh: json.dump(record, fh, indent=1,
+                                                                    allow_nan=False))
+                except Exception as exc:    # noqa: BLE001 - a crashed line is reported
+                    state["errors"].append(f"line {line}: {type(exc).__name__}: {exc}")
+                    log.error("map build: line %s raised %s", line, exc)
+            now = {p.name for p in Path(folder).glob("*_nu*_lr*_caB*.json")}
+            fresh = now - seen
+            if fresh or finished:
+                seen |= fresh
+                state["new"] += len(fresh)
+                state["failed"] += sum(not json.loads((Path(folder) / n).read_text())["success"]
+                                       for n in fresh)
+                state["running"] = len(pending)
+                report()
+    except BaseException:
+        if executor is not None:
+            _stop(executor)
+        elif client is not None:
+            client.cancel(list(pending))
+        raise
+    if executor is not None:
+        executor.shutdown(wait=True)

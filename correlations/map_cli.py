@@ -1,0 +1,220 @@
+"""``vesicle-tube map build | pack | query``: the solution map on the command line.
+
+Follows :mod:`lubrication.cli_contract` (table or ``--json``; exit 0 ok, 2 invalid input with one
+line naming the option or file, 130 interrupted). Light at start: the solvers, numpy and Dask
+load only inside the commands that use them.
+"""
+
+from __future__ import annotations
+
+import sys
+
+__all__ = ["add_map_parser"]
+
+# The option a user types for each parameter name of the library.
+OPTIONS = {"nu": "--nu", "lam_ratio": "--lam-ratio", "ca_b": "--ca-b", "methods": "--methods",
+           "out": "--out", "scheduler": "--scheduler", "max_time": "--max-time",
+           "map": "--map", "folder": "DIR"}
+
+UNITS = {"V_over_U": "-", "dp_plus_R0": "eta U/R0", "ell": "R", "film_min": "R",
+         "tension_max": "eta U", "tension_front": "eta U", "wall_shear_max": "eta U/R",
+         "curvature_rear": "1/R", "shape_class": ""}
+
+
+def _named(args, **renamed):
+    from lubrication.cli_contract import options_named
+    return options_named({**OPTIONS, **renamed}, args)
+
+
+def _progress(state) -> None:
+    eta = state["eta_s"]
+    eta = "?" if eta is None else (f"{eta:.0f} s" if eta < 120 else f"{eta / 60:.1f} min")
+    print(f"map build: {state['done']}/{state['total']} points ({state['failed']} failed), "
+          f"{state['running']} lines running, ETA {eta}", file=sys.stderr, flush=True)
+
+
+def cmd_map_build(args):
+    from lubrication.cli_contract import EXIT_INTERRUPTED, format_rows
+
+    from .map_build import build_map, make_grid
+    from .solution_map import read_points
+    grid_given = any(v is not None for v in (args.nu, args.lam_ratio, args.lam_ratio_bem,
+                                             args.lam_ratio_lubrication, args.ca_b, args.methods))
+    with _named(args):
+        grid = None
+        if grid_given:
+            ratios = args.lam_ratio
+            if args.lam_ratio_bem is not None or args.lam_ratio_lubrication is not None:
+                from .map_build import DEFAULT_GRID
+                ratios = {m: (given if given is not None else
+                              (args.lam_ratio or DEFAULT_GRID["lam_ratio"][m]))
+                          for m, given in (("bem", args.lam_ratio_bem),
+                                           ("lubrication", args.lam_ratio_lubrication))}
+            grid = make_grid(args.nu, ratios, args.ca_b, args.methods)
+        options = {"bem": {k: v for k, v in (("n_modes", args.bem_n_modes),
+                                             ("max_modes", args.bem_max_modes),
+                                             ("tol", args.bem_tol),
+                                             ("residual_tol", args.bem_residual_tol))
+                           if v is not None},
+                   "lubrication": ({"tol": args.lubrication_tol}
+                                   if args.lubrication_tol is not None else {})}
+        try:
+            out = build_map(args.out, grid, options=options, workers=args.workers,
+                            scheduler=args.scheduler, max_time=args.max_time,
+                            retry_failed=args.retry_failed, progress=_progress,
+                            pack=not args.no_pack)
+        except KeyboardInterrupt:
+            n = len(read_points(args.out)) if args.out else 0
+            print(f"vesicle-tube map build: interrupted; {n} points stored in {args.out} (every "
+                  "file complete); run the same command again to resume", file=sys.stderr)
+            raise SystemExit(EXIT_INTERRUPTED) from None
+    out = {"command": "map build", "converged": True, "out": str(args.out), **out}
+    if out["failed"]:
+        out["warnings"] = [f"{out['failed']} points failed (holes of the map, with their "
+                           "reasons in the packed file)"]
+    rows = [(k, out[k], "", "", "") for k in ("total", "done", "new", "failed", "missing")]
+    rows += [("seconds", out["seconds"], "s", "", ""), ("map", out["map"], "", "", "")]
+    return out, format_rows(rows, f"Solution map build in {args.out}")
+
+
+def cmd_map_pack(args):
+    from pathlib import Path
+
+    from lubrication.cli_contract import UsageError, check_output_dir
+
+    from .solution_map import pack_map
+    target = args.pack_out
+    if target is not None:
+        if Path(target).is_dir():
+            raise UsageError(f"--out {target}: this is a folder; give a file name")
+        check_output_dir("--out", str(Path(target).parent))
+    if not (Path(args.folder) / "build.json").is_file():
+        raise UsageError(f"DIR {args.folder}: not a build folder of 'vesicle-tube map build' "
+                         "(no build.json)")
+    with _named(args):
+        path = pack_map(args.folder, target)
+    import json
+    data = json.loads(path.read_text(encoding="utf-8"))
+    out = {"command": "map pack", "converged": True, "map": str(path),
+           "points": len(data["columns"]["nu"]), "holes": len(data["holes"]),
+           "bytes": path.stat().st_size}
+    from lubrication.cli_contract import format_rows
+    rows = [(k, out[k], "", "", "") for k in ("map", "points", "holes", "bytes")]
+    return out, format_rows(rows, f"Packed {args.folder}")
+
+
+def cmd_map_query(args):
+    from lubrication.checks import check_positive, check_range
+    from lubrication.cli_contract import UsageError, format_rows, format_value
+    from lubrication.geometry import critical_confinement
+
+    from .solution_map import load_map, outside_reason, query_map
+    if (args.lam is None) == (args.lam_ratio is None):
+        raise UsageError("give exactly one of --lam LAM, --lam-ratio RATIO")
+    with _named(args, lam_ratio="--lam" if args.lam is not None else "--lam-ratio"):
+        nu = float(check_range("nu", args.nu, 0.0, 1.0, lo_open=True))
+        check_positive("ca_b", args.ca_b)
+        if args.lam is not None:
+            lam_c = float(critical_confinement(nu))
+            lam = float(check_positive("lam", args.lam))
+            if lam >= lam_c:
+                raise UsageError(f"--lam {lam:g}: lam >= lam_c = {lam_c:.6g} for nu={nu:g}; the "
+                                 "vesicle cannot pass the tube intact")
+            ratio = lam / lam_c
+        else:
+            ratio = float(check_range("lam_ratio", args.lam_ratio, 0.0, 1.0, lo_open=True,
+                                      hi_open=True,
+                                      reason="lam/lam_c >= 1: the vesicle cannot pass"))
+        m = load_map(args.map)
+        reason = outside_reason(m, nu, ratio, args.ca_b)
+        if reason:
+            option = reason.split("=")[0]
+            option = {"nu": "--nu", "lam_ratio": "--lam" if args.lam is not None else
+                      "--lam-ratio", "ca_b": "--ca-b"}[option]
+            raise UsageError(f"{option}: query outside the map {m.source}: {reason}")
+        res = query_map(nu, ratio, args.ca_b, m)
+    quantities = {k: v.to_dict() for k, v in res.quantities.items()}
+    out = {"command": "map query", "converged": True, **res.to_dict(),
+           **{k: v["value"] for k, v in quantities.items()}}
+    rows, notes = [], []
+    for k, q in quantities.items():
+        if q["note"] and q["note"] not in notes:
+            notes.append(q["note"])
+        flag = f"note {notes.index(q['note']) + 1}" if q["note"] else ""
+        if q["value"] is not None and q["error"] is not None:
+            parts = ", ".join(f"{name} {format_value(q[f'{name}_error'])}"
+                              for name in ("interpolation", "solver", "model"))
+            flag = f"+- {format_value(q['error'])} ({parts}) {flag}".rstrip()
+        rows.append((k, q["value"], UNITS.get(k, "-"), "+".join(q["methods"]), flag))
+    title = (f"Solution map at nu={nu:g}, lam/lam_c={ratio:.6g}, Ca_B={args.ca_b:g} "
+             f"({res.source})")
+    return out, "\n".join([format_rows(rows, title)]
+                          + [f"note {i}: {n}" for i, n in enumerate(notes, 1)])
+
+
+def add_map_parser(subparsers) -> None:
+    """Add ``map build``, ``map pack`` and ``map query`` to the subcommands."""
+    from lubrication.cli_contract import Parser, finite_float, positive_int
+
+    p = subparsers.add_parser("map", help="precomputed solution map: build, pack, query")
+    sub = p.add_subparsers(dest="map_command", required=True, parser_class=Parser)
+
+    b = sub.add_parser("build", help="solve the grid of the map into a build folder "
+                       "(resumes a stopped build)")
+    b.add_argument("--out", required=True, metavar="DIR",
+                   help="build folder: build.json, one JSON file per point, solution_map.json")
+    b.add_argument("--workers", type=positive_int,
+                   help="local worker processes (default: the number of cores; 1: in this "
+                        "process)")
+    b.add_argument("--scheduler", metavar="ADDRESS",
+                   help="address of a Dask distributed scheduler, e.g. tcp://host:8786 "
+                        "(needs vesicle-tube[distributed]; workers must see --out)")
+    b.add_argument("--max-time", type=finite_float, metavar="SECONDS",
+                   help="wall-time budget of each point; an expired point is stored as "
+                        "failed [s] (default: no limit)")
+    b.add_argument("--nu", type=finite_float, nargs="+", help="reduced volumes, 0 < nu < 1 [-] "
+                   "(default 0.6 0.65 ... 0.95 0.98)")
+    b.add_argument("--lam-ratio", type=finite_float, nargs="+",
+                   help="lam/lam_c of every method, 0 < r < 1 [-] (default: BEM 0.2 ... 0.98, "
+                        "lubrication 0.9 ... 0.9999)")
+    b.add_argument("--lam-ratio-bem", type=finite_float, nargs="+",
+                   help="lam/lam_c of the BEM lines only [-]")
+    b.add_argument("--lam-ratio-lubrication", type=finite_float, nargs="+",
+                   help="lam/lam_c of the lubrication lines only [-]")
+    b.add_argument("--ca-b", type=finite_float, nargs="+",
+                   help="bending capillary numbers eta U R0^2/kappa > 0 [-] (default 5 15 50 500)")
+    b.add_argument("--methods", nargs="+", choices=("bem", "lubrication"),
+                   help="solvers (default both)")
+    b.add_argument("--bem-n-modes", type=positive_int,
+                   help="BEM shape modes (default: automatic refinement)")
+    b.add_argument("--bem-max-modes", type=positive_int, help="BEM largest mode count")
+    b.add_argument("--bem-tol", type=finite_float,
+                   help="BEM relative tolerance of the refinement pair [-] (default 1e-4)")
+    b.add_argument("--bem-residual-tol", type=finite_float,
+                   help="BEM steady residual tolerance [U] (default 1e-4)")
+    b.add_argument("--lubrication-tol", type=finite_float,
+                   help="lubrication collocation tolerance [-] (default 1e-7)")
+    b.add_argument("--retry-failed", action="store_true",
+                   help="solve again the points stored as failed")
+    b.add_argument("--no-pack", action="store_true", help="do not pack at the end")
+    b.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    b.set_defaults(func=cmd_map_build)
+
+    k = sub.add_parser("pack", help="pack a build folder into one map file")
+    k.add_argument("folder", metavar="DIR", help="build folder of 'map build'")
+    k.add_argument("--out", dest="pack_out", metavar="FILE",
+                   help="map file to write (default DIR/solution_map.json; the shipped map is "
+                        "correlations/data/solution_map.json)")
+    k.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    k.set_defaults(func=cmd_map_pack)
+
+    q = sub.add_parser("query", help="every quantity of the map at one point, with error bars")
+    q.add_argument("--nu", type=finite_float, required=True, help="reduced volume [-]")
+    q.add_argument("--lam", type=finite_float, help="confinement R0/R [-]")
+    q.add_argument("--lam-ratio", type=finite_float, help="lam/lam_c, 0 < r < 1 [-]")
+    q.add_argument("--ca-b", type=finite_float, required=True,
+                   help="bending capillary number eta U R0^2/kappa > 0 [-]")
+    q.add_argument("--map", metavar="FILE",
+                   help="packed map (default: the shipped correlations/data/solution_map.json)")
+    q.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    q.set_defaults(func=cmd_map_query)

@@ -1,0 +1,728 @@
+r"""The shipped solution map: stored steady solutions over (ν, λ/λc, Ca_B), packed, and queried
+with an error bar.
+
+Scalings (project conventions): R0 volume radius, R tube radius, λ = R0/R, λc(ν) the critical
+confinement, δ = 1 − λ/λc, U the mean velocity; V/U, Δp⁺R0/(ηU) (``dp_plus_R0``), lengths in R,
+tensions in ηU, wall shear stress in ηU/R, curvatures in 1/R, Ca_B = ηUR0²/κ.
+
+Three layers, in the order of the data's life:
+
+1. **Points** (written by :mod:`correlations.map_build`): one JSON file per finished grid point
+   of a build folder, named by :func:`point_filename`, with the inputs, the method, ``success``,
+   the reason of a failure, the quantities of :data:`QUANTITIES`, the solver's own error
+   estimates, diagnostics, the BEM shape (for warm starts) and provenance. A failed point is
+   stored as failed, never filled in.
+2. **Pack** (:func:`pack_map`): the converged points of a build folder as one compact JSON file
+   (format :data:`FORMAT`): the grid, provenance, column units, one list per column (no shapes),
+   the holes (failed or missing points with their reasons) and the leave-one-out interpolation
+   errors of every node, measured at pack time.
+3. **Query** (:func:`query_map`): every quantity at (ν, λ/λc, Ca_B) with its value, an
+   interpolation-error estimate, the solver's own error, the BEM–lubrication model error where
+   lubrication points are used, and the methods of the neighbouring points.
+
+Which method a node uses (the rule)
+-----------------------------------
+At each grid node (ν, λ/λc, Ca_B) the map takes the BEM point if it converged, else the
+lubrication point if it converged, else the node is a hole (with both reasons). Lubrication is
+thus used only where BEM has no converged point, in practice next to λc where BEM is hardest
+and lubrication becomes exact (Secomb et al. 1986; Barakat & Shaqfeh 2018b). A lubrication
+value carries a *model error*: the difference between lubrication and BEM measured at the
+largest λ/λc of the same (ν, Ca_B) line where both converged (the default grids overlap at
+λ/λc = 0.9–0.98 for this). Lubrication approaches the full Stokes solution as δ → 0, so the
+difference at the last common point bounds it above that point. A line without a common point
+reports the model error as unknown (None, with a note) rather than guessing.
+
+Interpolation variables
+-----------------------
+Near λc the solutions are expansions in powers of δ^(1/2) (lubrication structure, Barakat &
+Shaqfeh 2018a; physics notes §4: Q = δ[1 − kδ^(1/2)/ℓb + …]), with leading singular or vanishing
+powers of δ. The map therefore interpolates, along λ, in the coordinate x = δ^(1/2), and
+interpolates the *scaled* quantities that stay finite and smooth as δ → 0 (:data:`TRANSFORMS`):
+
+* (V/U − 1)/δ → 1 (V/U = 1 + δ + O(δ^(3/2)), Barakat & Shaqfeh 2018a; Chen et al. 2020
+  eq:asmyp1);
+* δ·Δp⁺R0/(ηU) → 4λ(X − 1), X = λc²ν^(−2/3) (Chen et al. 2020 eq:asmyp2);
+* film/δ (uniform film h/R = Q ≈ δ; Chen et al. 2020 eq. sfilm2);
+* ℓ (ℓ ≈ ℓc λ/λc, Chen et al. 2020 eq:sL);
+* δ^(3/2)·γ for γ_max and γ_front (Bretherton-type film h/R = 2.123 Ca_v^(2/3) with Ca_v =
+  ηV/γ_F, Secomb et al. 1986, Chen et al. 2020 eq. film_Ca, and h ≈ δ give γ ∝ δ^(−3/2));
+* δ·τ_w,max (gap shear ≈ V/h with h ≈ δ);
+* the rear-pole curvature as it is (it changes sign at the bullet–parachute transition).
+
+Positive scaled quantities are interpolated in their logarithm (relative accuracy over decades),
+the curvature (or any quantity whose neighbours are not all positive) linearly. Across ν the
+coordinate is ν, across Ca_B it is log Ca_B. Each axis uses local Lagrange interpolation of
+degree 2 (three nearest usable nodes, two when only two exist), tensor-product fashion
+(λ first, then Ca_B, then ν); a query on a grid node on some axis takes that node's values on
+that axis exactly.
+
+Error bar
+---------
+``interpolation_error``: at pack time every node is left out in turn along each axis and
+re-interpolated from the others (extrapolating at the ends of an axis); the difference is its
+leave-one-out (LOO) error on that axis, in the interpolated (transformed) variable. A query adds,
+over the axes it does not sit on, the largest LOO error of the nodes it uses (plus the weighted
+errors of the inner axes). LOO removes a node and so doubles the local spacing: for degree-2
+interpolation (error ∝ h³) it overestimates the error of the full grid, roughly eightfold in the
+interior, more at the ends. ``solver_error``: the solver's own error estimate (BEM refinement
+pair |fine − coarse| for V/U, Δp⁺ and γ_max; none otherwise) propagated with the interpolation
+weights; None when a neighbour has none. ``model_error``: see the rule above (and the Ca_B clamp
+below). ``error`` = the sum of the known parts, in the quantity's units.
+
+Range (what is refused)
+-----------------------
+A quantity is None with its reason, never extrapolated, when the query lies outside the map's ν
+range, below its smallest or above its largest λ/λc, below its smallest Ca_B, or next to a hole
+(a bracketing node on some axis is a hole). Above the largest Ca_B of the map (500 by default)
+and up to :data:`CA_B_CLAMP_MAX` = 1e4 the values at the largest Ca_B are returned when that is
+at least 50: Chen et al. (2020) §III.A (fig. shapes1) find the steady shape "virtually independent
+of Ca_B" for Ca_B ≥ 50 and their phase diagram spans 10 < Ca_B < 1e4. The clamp is not trusted
+blindly: its model error is the measured change of the (scaled) quantity between the two
+largest Ca_B of the map (e.g. 50 and 500), added to the error bar. Beyond 1e4 the query is refused.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lubrication.checks import CannotPassError, InvalidParameterError, as_finite, check_positive
+
+__all__ = ["FORMAT", "POINT_FORMAT", "QUANTITIES", "TRANSFORMS", "DEFAULT_MAP", "CA_B_CLAMP_MAX",
+           "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
+           "read_points", "pack_map", "load_map", "query_map"]
+
+#: identifiers of the packed file and of a stored point (checked on load)
+FORMAT, FORMAT_VERSION = "vesicle-tube solution map", 1
+POINT_FORMAT = "vesicle-tube map point"
+
+#: where the shipped map lives (package data); absent until a build has been packed there
+DEFAULT_MAP = Path(__file__).with_name("data") / "solution_map.json"
+
+#: largest Ca_B answered by clamping to the map's largest Ca_B (see the module docstring)
+CA_B_CLAMP_MAX = 1e4
+
+#: The quantities a point stores and the map interpolates, with their units.
+QUANTITIES = {
+    "V_over_U": "vesicle velocity over the mean velocity V/U [-]",
+    "dp_plus_R0": "extra pressure drop dp+ R0/(eta U) [-]",
+    "ell": "length L/R as the solver reports it [-]",
+    "film_min": "smallest gap between membrane and wall h/R [-]",
+    "tension_max": "largest membrane tension gamma_max/(eta U) [-]",
+    "tension_front": "front-pole tension gamma_F/(eta U) [-]",
+    "wall_shear_max": "largest wall shear stress tau_w R/(eta U) [-]",
+    "curvature_rear": "rear-pole curvature times R, negative where convex [-]",
+}
+
+#: Interpolated variable of each quantity q (module docstring): y = (q - offset) * delta**power,
+#: in its logarithm when ``log`` and every neighbour is positive.
+TRANSFORMS = {
+    "V_over_U": {"offset": 1.0, "power": -1.0, "log": True},
+    "dp_plus_R0": {"offset": 0.0, "power": 1.0, "log": True},
+    "ell": {"offset": 0.0, "power": 0.0, "log": True},
+    "film_min": {"offset": 0.0, "power": -1.0, "log": True},
+    "tension_max": {"offset": 0.0, "power": 1.5, "log": True},
+    "tension_front": {"offset": 0.0, "power": 1.5, "log": True},
+    "wall_shear_max": {"offset": 0.0, "power": 1.0, "log": True},
+    "curvature_rear": {"offset": 0.0, "power": 0.0, "log": False},
+}
+
+#: columns of the packed file besides the quantities and their errors, with units
+_BASE_COLUMNS = {
+    "method": "solver: bem or lubrication",
+    "nu": "reduced volume [-]",
+    "lam_ratio": "lam/lam_c [-]",
+    "ca_b": "bending capillary number eta U R0^2/kappa [-]",
+    "lam": "confinement R0/R [-]",
+    "shape_class": "bullet or parachute",
+    "residual": "solver residual (BEM: max|u - V e_x| [U]; lubrication: largest relative "
+                "collocation residual) [-]",
+    "bie_solves": "boundary-integral solves of the point (BEM; None for lubrication)",
+    "seconds": "wall-clock time of the point [s]",
+}
+_AXES = ("lam", "nu", "ca")      # order of interpolation: lam (x = delta^1/2), ca (log), nu
+_ON_NODE = 1e-12                 # a coordinate this close (relative) to a node is that node
+
+
+# --------------------------------------------------------------------------- points on disk
+
+def _num(x) -> str:
+    """A grid value in a file name: shortest exact-enough text (10 significant digits)."""
+    return f"{float(x):.10g}"
+
+
+def point_filename(method: str, nu: float, lam_ratio: float, ca_b: float) -> str:
+    """File name of a stored point, e.g. ``bem_nu0.9_lr0.95_caB50.json``.
+
+    >>> point_filename("lubrication", 0.6, 0.9999, 500)
+    'lubrication_nu0.6_lr0.9999_caB500.json'
+    """
+    return f"{method}_nu{_num(nu)}_lr{_num(lam_ratio)}_caB{_num(ca_b)}.json"
+
+
+def _bad_file(path, reason: str) -> InvalidParameterError:
+    return InvalidParameterError("map", str(path), "a file written by 'vesicle-tube map "
+                                 "build' or 'vesicle-tube map pack'", reason)
+
+
+def read_point(path) -> dict:
+    """One stored point (a dict), checked to be a point file; raises
+    :class:`~lubrication.checks.InvalidParameterError` (name ``map``) otherwise."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise _bad_file(path, f"unreadable point file ({exc})") from None
+    if not isinstance(data, dict) or data.get("format") != POINT_FORMAT:
+        raise _bad_file(path, "not a map point file")
+    for key in ("method", "nu", "lam_ratio", "ca_b", "success"):
+        if key not in data:
+            raise _bad_file(path, f"point file without {key!r}")
+    return data
+
+
+def read_points(folder) -> list[dict]:
+    """Every stored point of a build folder (files named like :func:`point_filename`)."""
+    folder = Path(folder)
+    return [read_point(p) for p in sorted(folder.glob("*_nu*_lr*_caB*.json"))
+            if not p.name.startswith(".")]
+
+
+# --------------------------------------------------------------------------- the map in memory
+
+def _key(*values) -> tuple:
+    """Dictionary key of grid coordinates (rounded: file names keep 10 digits)."""
+    return tuple(round(float(v), 9) for v in values)
+
+
+def _transform(q: str, value, delta: float, log: bool):
+    """Interpolated variable of quantity ``q`` (None if the value is missing or, with ``log``,
+    not positive after scaling)."""
+    if value is None:
+        return None
+    t = TRANSFORMS[q]
+    y = (value - t["offset"]) * delta ** t["power"]
+    if log:
+        return math.log(y) if y > 0 else None
+    return y
+
+
+def _inverse(q: str, y: float, delta: float, log: bool) -> float:
+    t = TRANSFORMS[q]
+    return (math.exp(y) if log else y) / delta ** t["power"] + t["offset"]
+
+
+def _lagrange(xs, x) -> list[float]:
+    """Lagrange weights of the nodes ``xs`` at ``x`` (exactly 1 and 0s on a node)."""
+    w = []
+    for i, xi in enumerate(xs):
+        p = 1.0
+        for j, xj in enumerate(xs):
+            if j != i:
+                p *= (x - xj) / (xi - xj)
+        w.append(p)
+    return w
+
+
+@dataclass
+class _Part:
+    """A partial interpolation: value y (transformed), its error parts in y, the leaf rows
+    used and notes."""
+    y: float
+    interp: float | None
+    solver: float | None
+    model: float | None
+    rows: frozenset
+    notes: tuple = ()
+
+
+def _add(a, b):
+    return None if a is None or b is None else a + b
+
+
+class SolutionMap:
+    """A packed solution map in memory, indexed for queries (see :func:`load_map`)."""
+
+    def __init__(self, data: dict, source: str = ""):
+        self.source = source
+        self.grid = data["grid"]
+        self.provenance = data.get("provenance", {})
+        self.holes = data.get("holes", [])
+        self.columns = data["columns"]
+        self.n = len(self.columns["nu"])
+        self.nus = sorted(float(v) for v in self.grid["nu"])
+        self.cas = sorted(float(v) for v in self.grid["ca_b"])
+        ratios = set()
+        for method in self.grid["methods"]:
+            ratios.update(float(v) for v in self.grid["lam_ratio"][method])
+        self.ratios = sorted(ratios)
+        # x = delta^1/2 of each lam_ratio node, ascending (lam_ratio descending)
+        self._ratio_of = sorted(self.ratios, reverse=True)
+        self.xs = [math.sqrt(1.0 - r) for r in self._ratio_of]
+        self._cs = [math.log(v) for v in self.cas]
+        self._row = {_key(*k[1:]) + (k[0],): i for i, k in enumerate(zip(
+            self.columns["method"], self.columns["nu"], self.columns["lam_ratio"],
+            self.columns["ca_b"]))}
+        self._on_grid = {m: {round(float(r), 9) for r in self.grid["lam_ratio"][m]}
+                         for m in self.grid["methods"]}
+        self._hole = {_key(h["nu"], h["lam_ratio"], h["ca_b"]) + (h["method"],): h["reason"]
+                      for h in self.holes}
+        self._overlap = {}
+
+    # ---------------------------------------------------------------- nodes and the rule
+    def node(self, nu: float, lam_ratio: float, ca_b: float) -> tuple[int | None, str]:
+        """Row used at a grid node (BEM if converged, else lubrication if converged) and ''; or
+        (None, the reason it is a hole)."""
+        reasons = []
+        for method in ("bem", "lubrication"):
+            if round(lam_ratio, 9) not in self._on_grid.get(method, ()):
+                continue
+            k = _key(nu, lam_ratio, ca_b) + (method,)
+            if k in self._row:
+                return self._row[k], ""
+            reasons.append(f"{method}: {self._hole.get(k, 'not computed')}")
+        return None, ("hole at nu=%.6g, lam/lam_c=%.6g, Ca_B=%.6g (%s)"
+                      % (nu, lam_ratio, ca_b, "; ".join(reasons) or "no point"))
+
+    def value(self, row: int, q: str):
+        v = self.columns[q][row]
+        return None if v is None else float(v)
+
+    def _model_error(self, row: int, q: str, log: bool):
+        """Model error (in y) of a lubrication row: |y_lub − y_bem| at the largest lam_ratio of
+        its line where both converged; 0 for BEM; None when unknown."""
+        if self.columns["method"][row] != "lubrication":
+            return 0.0
+        nu, ca = self.columns["nu"][row], self.columns["ca_b"][row]
+        k = (_key(nu, ca), q, log)
+        if k not in self._overlap:
+            self._overlap[k] = None
+            for r in sorted(self.ratios, reverse=True):
+                rb = self._row.get(_key(nu, r, ca) + ("bem",))
+                rl = self._row.get(_key(nu, r, ca) + ("lubrication",))
+                if rb is None or rl is None:
+                    continue
+                d = 1.0 - r
+                yb, yl = (_transform(q, self.value(i, q), d, log) for i in (rb, rl))
+                if yb is not None and yl is not None:
+                    self._overlap[k] = abs(yl - yb)
+                    break
+        return self._overlap[k]
+
+    def _solver_error(self, row: int, q: str, log: bool, delta: float):
+        err = self.columns.get(f"err_{q}", [None] * self.n)[row]
+        v = self.value(row, q)
+        if err is None or v is None:
+            return None
+        t = TRANSFORMS[q]
+        if log:
+            base = abs(v - t["offset"])
+            return float(err) / base if base > 0 else None
+        return float(err) * delta ** t["power"]
+
+    def _loo(self, row: int, q: str, axis: str):
+        col = self.columns.get(f"loo_{axis}_{q}")
+        return None if col is None or col[row] is None else float(col[row])
+
+    # ---------------------------------------------------------------- one axis
+    def _axis(self, q, axis, coords, x, inner, exclude=None, extrapolate=False):
+        """Interpolate along one axis: ``coords`` the node coordinates (ascending), ``inner(i)``
+        the partial result at node i (or a reason string). Returns a _Part or a reason."""
+        idx = [i for i in range(len(coords)) if i != exclude]
+        for i in idx:
+            if abs(coords[i] - x) <= _ON_NODE * max(1.0, abs(x)):
+                return inner(i)
+        below = [i for i in idx if coords[i] < x]
+        above = [i for i in idx if coords[i] > x]
+        if not extrapolate:
+            if not below or not above:
+                return "outside"
+            parts = {}
+            for i in (below[-1], above[0]):
+                parts[i] = inner(i)
+                if isinstance(parts[i], str):
+                    return parts[i]
+            for i in ([below[-2]] if len(below) > 1 else []) + ([above[1]] if len(above) > 1
+                                                                  else []):
+                p = inner(i)
+                if not isinstance(p, str):
+                    parts[i] = p
+            if len(parts) > 3:              # keep the third node nearest to x
+                far = max((i for i in parts if i not in (below[-1], above[0])),
+                          key=lambda i: abs(coords[i] - x))
+                del parts[far]
+        else:
+            parts = {}
+            for i in sorted(idx, key=lambda i: abs(coords[i] - x)):
+                p = inner(i)
+                if not isinstance(p, str):
+                    parts[i] = p
+                if len(parts) == 3:
+                    break
+            if not parts:
+                return "no neighbour"
+        nodes = sorted(parts)
+        w = _lagrange([coords[i] for i in nodes], x)
+        ps = [parts[i] for i in nodes]
+        rows = frozenset().union(*(p.rows for p in ps))
+        loo = [self._loo(r, q, axis) for r in rows]
+        interp = None
+        if all(p.interp is not None for p in ps) and all(e is not None for e in loo):
+            interp = sum(abs(wi) * p.interp for wi, p in zip(w, ps)) + max(loo)
+        solver = model = 0.0
+        for wi, p in zip(w, ps):
+            solver = _add(solver, None if p.solver is None else abs(wi) * p.solver)
+            model = _add(model, None if p.model is None else abs(wi) * p.model)
+        notes = tuple(dict.fromkeys(n for p in ps for n in p.notes))
+        return _Part(sum(wi * p.y for wi, p in zip(w, ps)), interp, solver, model, rows, notes)
+
+    # ---------------------------------------------------------------- the three axes
+    def _leaf(self, q, log, nu, ratio, ca, delta):
+        row, reason = self.node(nu, ratio, ca)
+        if row is None:
+            return reason
+        y = _transform(q, self.value(row, q), delta, log)
+        if y is None:
+            return (f"{q} missing at nu={nu:.6g}, lam/lam_c={ratio:.6g}, Ca_B={ca:.6g}"
+                    if self.value(row, q) is None else "not positive")
+        model = self._model_error(row, q, log)
+        notes = () if model is not None else (
+            f"lubrication at nu={nu:.6g}, Ca_B={ca:.6g} is not checked against BEM (no common "
+            "point on this line): model error unknown",)
+        return _Part(y, 0.0, self._solver_error(row, q, log, delta), model,
+                     frozenset([row]), notes)
+
+    def _interpolate(self, q, log, nu, x, c, exclude=None):
+        """Value of quantity q (transformed) at (nu, x = delta^1/2, c = log Ca_B); ``exclude``
+        = (axis, node index) leaves that node out and extrapolates along that axis (LOO)."""
+        delta = x * x
+        ex = dict([exclude]) if exclude else {}
+
+        def along_lam(i_nu, i_ca):
+            return self._axis(q, "lam", self.xs, x,
+                              lambda k: self._leaf(q, log, self.nus[i_nu], self._ratio_of[k],
+                                                   self.cas[i_ca], delta),
+                              ex.get("lam"), "lam" in ex)
+
+        def along_ca(i_nu):
+            return self._axis(q, "ca", self._cs, c, lambda j: along_lam(i_nu, j), ex.get("ca"),
+                              "ca" in ex)
+
+        return self._axis(q, "nu", self.nus, nu, along_ca, ex.get("nu"), "nu" in ex)
+
+    def _log_usable(self, q) -> bool:
+        return TRANSFORMS[q]["log"]
+
+    def quantity(self, q: str, nu: float, lam_ratio: float, ca_b: float) -> "MapValue":
+        """One quantity at a point inside the map's box (see :func:`query_map`)."""
+        delta = 1.0 - lam_ratio
+        x, c, notes = math.sqrt(delta), math.log(ca_b), []
+        clamp = None
+        if ca_b > self.cas[-1] * (1 + _ON_NODE):
+            c = math.log(self.cas[-1])
+            notes.append(f"Ca_B={ca_b:.6g} above the map's largest {self.cas[-1]:g}: value at "
+                         f"Ca_B={self.cas[-1]:g} (shapes nearly independent of Ca_B >= 50, Chen "
+                         "et al. 2020), with the measured change between the two largest Ca_B "
+                         "as model error")
+            clamp = True
+        log = self._log_usable(q)
+        part = self._interpolate(q, log, nu, x, c)
+        if isinstance(part, str) and log and part == "not positive":
+            log = False
+            part = self._interpolate(q, log, nu, x, c)
+        if isinstance(part, str):
+            return MapValue(None, note=part if part != "outside" else "outside the map")
+        if clamp:
+            other = (self._interpolate(q, log, nu, x, math.log(self.cas[-2]))
+                     if len(self.cas) > 1 else "no second Ca_B")
+            if isinstance(other, str):
+                part.model = None
+                notes.append(f"clamp error unknown ({other})")
+            else:
+                part.model = _add(part.model, abs(part.y - other.y))
+        value = _inverse(q, part.y, delta, log)
+        t = TRANSFORMS[q]
+
+        def to_value(e):
+            if e is None:
+                return None
+            if log:
+                return abs(value - t["offset"]) * math.expm1(e)
+            return e / delta ** t["power"]
+
+        methods = tuple(sorted({self.columns["method"][r] for r in part.rows}))
+        known = [to_value(e) for e in (part.interp, part.solver, part.model) if e is not None]
+        unknown = [name for name, e in (("interpolation", part.interp), ("solver", part.solver),
+                                        ("model", part.model)) if e is None]
+        if unknown:
+            notes.append("error without the unknown " + ", ".join(unknown) + " part")
+        return MapValue(value, error=sum(known), interpolation_error=to_value(part.interp),
+                        solver_error=to_value(part.solver), model_error=to_value(part.model),
+                        methods=methods, rows=tuple(sorted(part.rows)),
+                        note="; ".join(list(part.notes) + notes))
+
+    def shape_class(self, rows) -> "MapValue":
+        classes = {self.columns["shape_class"][r] for r in rows}
+        methods = tuple(sorted({self.columns["method"][r] for r in rows}))
+        if len(classes) == 1 and None not in classes:
+            return MapValue(classes.pop(), methods=methods, rows=tuple(sorted(rows)))
+        return MapValue(None, methods=methods, rows=tuple(sorted(rows)),
+                        note="the neighbouring points differ (" + ", ".join(
+                            sorted(map(str, classes))) + "): a bullet-parachute transition")
+
+    # ---------------------------------------------------------------- LOO (pack time)
+    def leave_one_out(self) -> dict:
+        """Columns ``loo_<axis>_<q>``: the LOO error (in the interpolated variable) of every
+        row that is a node's chosen point (None for the others and where no estimate exists)."""
+        out = {f"loo_{a}_{q}": [None] * self.n for a in _AXES for q in QUANTITIES}
+        for i_nu, nu in enumerate(self.nus):
+            for i_ca, ca in enumerate(self.cas):
+                for k, (x, ratio) in enumerate(zip(self.xs, self._ratio_of)):
+                    row, _ = self.node(nu, ratio, ca)
+                    if row is None:
+                        continue
+                    for q in QUANTITIES:
+                        log = self._log_usable(q)
+                        y0 = _transform(q, self.value(row, q), x * x, log)
+                        if y0 is None:
+                            log = False
+                            y0 = _transform(q, self.value(row, q), x * x, log)
+                        if y0 is None:
+                            continue
+                        for axis, index in (("lam", k), ("nu", i_nu), ("ca", i_ca)):
+                            p = self._interpolate(q, log, nu, x, self._cs[i_ca], (axis, index))
+                            if not isinstance(p, str):
+                                out[f"loo_{axis}_{q}"][row] = float(f"{abs(p.y - y0):.3g}")
+        return out
+
+
+@dataclass(frozen=True)
+class MapValue:
+    """One quantity of a map query: the value and its error parts in the quantity's units
+    (None where unknown), the methods and rows of the points used, and a note (the reason
+    when ``value`` is None)."""
+    value: float | str | None
+    error: float | None = None
+    interpolation_error: float | None = None
+    solver_error: float | None = None
+    model_error: float | None = None
+    methods: tuple = ()
+    rows: tuple = field(default=(), repr=False)
+    note: str = ""
+
+    def to_dict(self) -> dict:
+        return {"value": self.value, "error": self.error,
+                "interpolation_error": self.interpolation_error,
+                "solver_error": self.solver_error, "model_error": self.model_error,
+                "methods": list(self.methods), "note": self.note}
+
+
+@dataclass(frozen=True)
+class MapQuery:
+    """Result of :func:`query_map`: the inputs, the map file and one :class:`MapValue` per
+    quantity (``quantities``, keyed like :data:`QUANTITIES` plus ``shape_class``)."""
+    nu: float
+    lam_ratio: float
+    ca_b: float
+    source: str
+    quantities: dict
+
+    def __getitem__(self, key):
+        return self.quantities[key].value
+
+    def to_dict(self) -> dict:
+        return {"nu": self.nu, "lam_ratio": self.lam_ratio, "ca_b": self.ca_b,
+                "map": self.source,
+                "quantities": {k: v.to_dict() for k, v in self.quantities.items()}}
+
+
+# --------------------------------------------------------------------------- load
+
+def _check_packed(data, path) -> None:
+    """Raise if ``data`` is not a well-formed packed map."""
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise _bad_file(path, "not a vesicle-tube solution map (no 'format' header)")
+    if data.get("version") != FORMAT_VERSION:
+        raise _bad_file(path, f"map format version {data.get('version')!r}; this version "
+                              f"reads {FORMAT_VERSION}")
+    grid, cols = data.get("grid"), data.get("columns")
+    if not isinstance(grid, dict) or not isinstance(cols, dict):
+        raise _bad_file(path, "no grid or columns")
+    try:
+        methods = list(grid["methods"])
+        if not set(methods) <= {"bem", "lubrication"} or not methods:
+            raise ValueError(f"methods {methods}")
+        for name in ("nu", "ca_b"):
+            as_finite(name, grid[name])
+            if not grid[name]:
+                raise ValueError(f"empty {name}")
+        for m in methods:
+            as_finite("lam_ratio", grid["lam_ratio"][m])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise _bad_file(path, f"malformed grid ({exc})") from None
+    needed = ["method", "nu", "lam_ratio", "ca_b", "shape_class", *QUANTITIES]
+    missing = [c for c in needed if c not in cols]
+    if missing:
+        raise _bad_file(path, "missing columns " + ", ".join(missing))
+    lengths = {len(v) if isinstance(v, list) else -1 for v in cols.values()}
+    if len(lengths) != 1 or -1 in lengths:
+        raise _bad_file(path, "columns of unequal length")
+    for c in ("nu", "lam_ratio", "ca_b", *QUANTITIES):
+        if any(v is not None and not isinstance(v, (int, float)) for v in cols[c]):
+            raise _bad_file(path, f"non-numeric value in column {c!r}")
+
+
+@functools.lru_cache(maxsize=8)
+def _load(path: str, mtime: float) -> SolutionMap:
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+        data = json.loads(text)
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise _bad_file(path, f"unreadable ({exc})") from None
+    _check_packed(data, path)
+    return SolutionMap(data, path)
+
+
+def load_map(path=None) -> SolutionMap:
+    """The packed map at ``path`` (default :data:`DEFAULT_MAP`), cached while the file is
+    unchanged. Raises :class:`~lubrication.checks.InvalidParameterError` (name ``map``) for a
+    missing, corrupt or foreign file; "no map shipped" when the default is absent."""
+    p = Path(DEFAULT_MAP if path is None else path)
+    try:
+        mtime = os.stat(p).st_mtime
+    except OSError:
+        if path is None:
+            raise InvalidParameterError(
+                "map", str(p), "a packed map", "no map shipped with this installation: build "
+                "one with 'vesicle-tube map build' and give it with --map") from None
+        raise _bad_file(p, "no such file") from None
+    return _load(str(p), mtime)
+
+
+# --------------------------------------------------------------------------- query
+
+def query_map(nu: float, lam_ratio: float, ca_b: float, map=None) -> MapQuery:
+    r"""Every quantity of the solution map at (ν, λ/λc, Ca_B), with an error bar.
+
+    Interpolation variables, the BEM/lubrication rule, the error parts and the range are those
+    of the module docstring: inside the map's box the value is interpolated in x = δ^(1/2)
+    (δ = 1 − λ/λc), log Ca_B and ν on δ-scaled quantities whose limits as δ → 0 are finite
+    (Chen et al. 2020 eq:asmyp1, eq:asmyp2, eq:sL, eq. sfilm2; Barakat & Shaqfeh 2018a).
+    Outside it (ν beyond the map's range, λ/λc below or above its nodes, Ca_B below its smallest
+    value or above :data:`CA_B_CLAMP_MAX`) and next to holes a quantity is None with the reason;
+    nothing is extrapolated. Between the largest Ca_B of the map (≥ 50) and 1e4 the values at
+    the largest Ca_B are returned with the measured Ca_B change as model error (Chen et al. 2020
+    §III.A: shapes virtually independent of Ca_B ≥ 50).
+
+    Parameters
+    ----------
+    nu : float
+        Reduced volume, 0 < nu <= 1 [-].
+    lam_ratio : float
+        λ/λc, 0 < lam_ratio < 1 [-] (λ ≥ λc raises :class:`~lubrication.checks.CannotPassError`).
+    ca_b : float
+        Bending capillary number ηUR0²/κ > 0 [-].
+    map : SolutionMap, str or Path, optional
+        The map, or its packed file; default the shipped one (:data:`DEFAULT_MAP`).
+
+    Returns
+    -------
+    MapQuery
+        ``quantities[q]`` a :class:`MapValue` for each of :data:`QUANTITIES` and
+        ``shape_class``.
+    """
+    nu = float(as_finite("nu", nu))
+    if not 0.0 < nu <= 1.0:
+        raise InvalidParameterError("nu", nu, "0 < nu <= 1")
+    lam_ratio = float(as_finite("lam_ratio", lam_ratio))
+    if lam_ratio >= 1.0:
+        raise CannotPassError("lam_ratio", lam_ratio, "0 < lam_ratio < 1",
+                              "lam >= lam_c: the vesicle cannot pass the tube intact")
+    if lam_ratio <= 0.0:
+        raise InvalidParameterError("lam_ratio", lam_ratio, "0 < lam_ratio < 1")
+    ca_b = float(check_positive("ca_b", ca_b))
+    m = map if isinstance(map, SolutionMap) else load_map(map)
+    reason = outside_reason(m, nu, lam_ratio, ca_b)
+    out = {}
+    if reason:
+        out = {q: MapValue(None, note=reason) for q in (*QUANTITIES, "shape_class")}
+    else:
+        for q in QUANTITIES:
+            out[q] = m.quantity(q, nu, lam_ratio, ca_b)
+        rows = out["V_over_U"].rows or out["ell"].rows
+        out["shape_class"] = (m.shape_class(rows) if rows else
+                              MapValue(None, note=out["V_over_U"].note))
+    return MapQuery(nu, lam_ratio, ca_b, m.source, out)
+
+
+def outside_reason(m: SolutionMap, nu: float, lam_ratio: float, ca_b: float) -> str:
+    """Why (nu, lam_ratio, ca_b) lies outside the box of map ``m`` ('' if inside), naming the
+    parameter and the map's range."""
+    eps = _ON_NODE
+    if not m.nus[0] * (1 - eps) <= nu <= m.nus[-1] * (1 + eps):
+        return f"nu={nu:.6g} outside the map's range {m.nus[0]:g} <= nu <= {m.nus[-1]:g}"
+    lo, hi = m.ratios[0], m.ratios[-1]
+    if not lo * (1 - eps) <= lam_ratio <= hi * (1 + eps):
+        return (f"lam_ratio={lam_ratio:.6g} outside the map's range {lo:g} <= lam/lam_c <= "
+                f"{hi:g}")
+    top = CA_B_CLAMP_MAX if m.cas[-1] >= 50.0 else m.cas[-1]
+    if not m.cas[0] * (1 - eps) <= ca_b <= top * (1 + eps):
+        return (f"ca_b={ca_b:.6g} outside the map's range {m.cas[0]:g} <= Ca_B <= {top:g}"
+                + (" (values above the largest map Ca_B are clamped)" if top > m.cas[-1] else ""))
+    return ""
+
+
+# --------------------------------------------------------------------------- pack
+
+def pack_map(folder, out=None) -> Path:
+    """Pack the finished points of build folder ``folder`` into one file (format
+    :data:`FORMAT`), atomically; default ``<folder>/solution_map.json``. Returns the path.
+
+    The file holds ``grid``, ``parameters`` and ``provenance`` (from ``build.json``), the
+    ``units`` of every column, ``columns`` (the converged points, one list per column, no
+    shapes), ``holes`` (failed or missing grid points with their reasons) and the LOO errors
+    ``loo_<axis>_<q>`` (see the module docstring).
+    """
+    from lubrication.io import atomic_write
+    folder = Path(folder)
+    try:
+        build = json.loads((folder / "build.json").read_text(encoding="utf-8"))
+        grid = build["grid"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise InvalidParameterError("folder", str(folder), "a build folder of 'vesicle-tube "
+                                    "map build' (with build.json)", str(exc)) from None
+    stored = {_key(p["nu"], p["lam_ratio"], p["ca_b"]) + (p["method"],): p
+              for p in read_points(folder)}
+    errors = sorted({f"err_{q}" for p in stored.values()
+                     for q in (p.get("error_estimate") or {}) if q in QUANTITIES})
+    names = [*_BASE_COLUMNS, *QUANTITIES, *errors]
+    cols = {c: [] for c in names}
+    holes = []
+    for method in grid["methods"]:
+        for nu in grid["nu"]:
+            for ca in grid["ca_b"]:
+                for r in grid["lam_ratio"][method]:
+                    p = stored.get(_key(nu, r, ca) + (method,))
+                    if p is None or not p["success"]:
+                        holes.append({"method": method, "nu": nu, "lam_ratio": r, "ca_b": ca,
+                                      "reason": "not computed" if p is None else
+                                      (p.get("message") or "failed")})
+                        continue
+                    est = p.get("error_estimate") or {}
+                    for c in names:
+                        cols[c].append(est.get(c[4:]) if c.startswith("err_") else p.get(c))
+    units = {**_BASE_COLUMNS, **QUANTITIES,
+             **{e: f"solver error estimate of {e[4:]} (same units)" for e in errors}}
+    data = {"format": FORMAT, "version": FORMAT_VERSION, "grid": grid,
+            "parameters": build.get("parameters", {}), "provenance": build.get("provenance", {}),
+            "transforms": TRANSFORMS, "units": units, "columns": cols, "holes": holes}
+    loo = SolutionMap(data, str(folder)).leave_one_out()
+    data["columns"].update(loo)
+    data["units"].update({k: f"leave-one-out error of {k.split('_', 2)[2]} along "
+                             f"{k.split('_')[1]}, in its interpolated variable" for k in loo})
+    path = Path(out) if out is not None else folder / "solution_map.json"
+    atomic_write(path, lambda f: json.dump(data, f, separators=(",", ":"), allow_nan=False))
+    return path
