@@ -50,6 +50,9 @@ log = logging.getLogger(__name__)
 
 METHODS = ("bem", "lubrication")
 
+#: seconds to wait for a Dask scheduler before --scheduler is reported unreachable
+SCHEDULER_TIMEOUT_S = 5
+
 #: The minimum grid the product needs. The BEM and lubrication λ/λc lists overlap at 0.9–0.98
 #: on purpose: the overlap measures where lubrication becomes accurate (the model error of the
 #: map's lubrication values, :mod:`correlations.solution_map`).
@@ -262,7 +265,7 @@ def _connect(scheduler: str):
                                     "dask.distributed is not installed (pip install "
                                     "'vesicle-tube[distributed]')") from None
     try:
-        return Client(scheduler, timeout="5s")
+        return Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s")
     except (OSError, TimeoutError, ValueError) as exc:
         raise InvalidParameterError("scheduler", scheduler, "the address of a reachable Dask "
                                     "scheduler", f"cannot connect ({exc})") from None
@@ -353,6 +356,8 @@ def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
 def _run(folder, grid, options, workers, client, max_time, retry_failed, progress, pack,
          provenance) -> dict:
     started = time.monotonic()
+    for tmp in folder.glob(".*.tmp"):      # left by a killed build (atomic_write's temporaries)
+        tmp.unlink(missing_ok=True)
     stored: dict = {}
     for p in read_points(folder):
         if p["success"] or not retry_failed:
@@ -402,6 +407,11 @@ def _run(folder, grid, options, workers, client, max_time, retry_failed, progres
             "seconds": time.monotonic() - started, "map": str(packed) if packed else None}
 
 
+def _point_names(folder) -> set[str]:
+    return {p.name for p in Path(folder).glob("*_nu*_lr*_caB*.json")
+            if not p.name.startswith(".")}
+
+
 def _parallel(folder, jobs, args, workers, client, state, report) -> None:
     """Run the line jobs on a process pool or a Dask client, polling the build folder for
     progress; Ctrl-C stops the workers and propagates."""
@@ -418,7 +428,7 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
         def submit(*a, **k):
             return client.submit(*a, pure=False, **k)
         parent = None
-    seen = {p.name for p in Path(folder).glob("*_nu*_lr*_caB*.json")}
+    seen = _point_names(folder)
     pending: dict = {}
     try:
         pending = {submit(solve_line, str(folder), m, nu, ca, ratios, have, *args,
@@ -438,7 +448,7 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
                 except Exception as exc:    # noqa: BLE001 - a crashed line is reported
                     state["errors"].append(f"line {line}: {type(exc).__name__}: {exc}")
                     log.error("map build: line %s raised %s", line, exc)
-            now = {p.name for p in Path(folder).glob("*_nu*_lr*_caB*.json")}
+            now = _point_names(folder)
             fresh = now - seen
             if fresh or finished:
                 seen |= fresh

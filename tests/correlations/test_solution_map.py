@@ -1,0 +1,233 @@
+"""The solution map: store, pack, query (correlations/solution_map.py) and the in-process build
+(correlations/map_build.py), on tiny grids.
+
+Independent reference for the interpolation: an analytic function of (nu, lam/lam_c, Ca_B),
+stored as a fake build, must be reproduced exactly at the nodes and within the stated error bar
+between them.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from correlations import map_build
+from correlations.map_build import build_map, make_grid
+from correlations.solution_map import (POINT_FORMAT, QUANTITIES, load_map, pack_map,
+                                       point_filename, query_map, read_points)
+
+# ----------------------------------------------------------------------------- analytic map
+
+NUS = [0.6, 0.7, 0.8, 0.9]
+BEM_RATIOS = [0.2, 0.4, 0.6, 0.8, 0.9]
+LUB_RATIOS = [0.9, 0.95, 0.99]
+CAS = [5.0, 50.0, 500.0]
+LUB_BIAS = 1e-3          # lubrication = truth * (1 + LUB_BIAS): a model error to measure
+
+
+def truth(q, nu, r, ca):
+    """Smooth, not polynomial, in the map's variables; the singular powers of delta as in
+    correlations.solution_map.TRANSFORMS."""
+    d = 1.0 - r
+    s, c = math.sqrt(d), math.log(ca)
+    g = 0.3 * math.sin(2 * nu) + 0.5 * s * s - 0.4 * s + 0.1 * c + 0.05 * s * c \
+        + 0.2 * math.cos(3 * nu * s)
+    if q == "curvature_rear":
+        return -1.0 + 0.5 * s + 0.2 * math.sin(3 * nu) + 0.01 * c
+    power = {"V_over_U": -1.0, "dp_plus_R0": 1.0, "ell": 0.0, "film_min": -1.0,
+             "tension_max": 1.5, "tension_front": 1.5, "wall_shear_max": 1.0}[q]
+    scale = {"V_over_U": 1.0, "film_min": 1.0, "ell": 3.0}.get(q, 10.0)
+    return (1.0 if q == "V_over_U" else 0.0) + scale * math.exp(g) * d ** (-power) / (
+        1.0 if q != "V_over_U" else 1.0)
+
+
+def _write_point(folder, method, nu, r, ca, success=True, bias=0.0):
+    rec = {"format": POINT_FORMAT, "method": method, "nu": nu, "lam_ratio": r, "ca_b": ca,
+           "success": success, "message": "converged" if success else "no steady shape found",
+           "shape_class": "bullet" if success else None,
+           "error_estimate": {q: (1e-9 if method == "bem" and q in
+                                  ("V_over_U", "dp_plus_R0", "tension_max") else None)
+                              for q in QUANTITIES},
+           "residual": 1e-6, "bie_solves": 10, "seconds": 1.0}
+    for q in QUANTITIES:
+        rec[q] = truth(q, nu, r, ca) * (1 + bias) if success else None
+    (folder / point_filename(method, nu, r, ca)).write_text(json.dumps(rec))
+
+
+def _fake_build(folder, hole=None):
+    folder.mkdir(parents=True, exist_ok=True)
+    grid = make_grid(NUS, {"bem": BEM_RATIOS, "lubrication": LUB_RATIOS}, CAS)
+    (folder / "build.json").write_text(json.dumps({"grid": grid, "parameters": {},
+                                                   "provenance": {"test": "analytic"}}))
+    for nu in NUS:
+        for ca in CAS:
+            for r in BEM_RATIOS:
+                _write_point(folder, "bem", nu, r, ca, success=(nu, r, ca) != hole)
+            for r in LUB_RATIOS:
+                _write_point(folder, "lubrication", nu, r, ca, bias=LUB_BIAS)
+    return pack_map(folder)
+
+
+@pytest.fixture(scope="module")
+def analytic_map(tmp_path_factory):
+    return load_map(_fake_build(tmp_path_factory.mktemp("analytic")))
+
+
+def test_query_reproduces_the_grid_values_at_the_nodes(analytic_map):
+    for nu, r, ca, method in [(0.7, 0.4, 50.0, "bem"), (0.9, 0.9, 5.0, "bem"),
+                              (0.6, 0.95, 500.0, "lubrication"), (0.8, 0.99, 50.0, "lubrication")]:
+        res = query_map(nu, r, ca, analytic_map)
+        bias = LUB_BIAS if method == "lubrication" else 0.0
+        for q in QUANTITIES:
+            v = res.quantities[q]
+            assert v.value == pytest.approx(truth(q, nu, r, ca) * (1 + bias), rel=1e-12, abs=0)
+            assert v.methods == (method,)
+            assert v.interpolation_error == 0.0
+        assert res["shape_class"] == "bullet"
+
+
+BETWEEN = [(0.65, 0.3, 10.0), (0.75, 0.7, 100.0), (0.85, 0.5, 7.0), (0.62, 0.85, 300.0),
+           (0.88, 0.93, 20.0), (0.72, 0.97, 60.0), (0.81, 0.985, 400.0)]
+
+
+def test_interpolation_of_an_analytic_map_is_within_its_stated_error(analytic_map):
+    ratios = []
+    for nu, r, ca in BETWEEN:
+        res = query_map(nu, r, ca, analytic_map)
+        for q in QUANTITIES:
+            v = res.quantities[q]
+            exact = truth(q, nu, r, ca)
+            assert v.value is not None, (q, v.note)
+            assert v.error is not None and v.interpolation_error > 0
+            assert abs(v.value - exact) <= v.error, (nu, r, ca, q, v.value, exact, v)
+            ratios.append(v.error / abs(v.value - exact))
+            if r > 0.9:
+                assert "lubrication" in v.methods and v.model_error > 0
+    # conservative by construction (leave-one-out doubles the spacing), but not a blanket:
+    # measured 6-60x the true error, with rare outliers where the true error nearly cancels
+    ratios.sort()
+    assert ratios[len(ratios) // 2] < 60, ratios
+
+
+def test_outside_the_map_and_holes_give_none_with_the_reason(tmp_path):
+    m = load_map(_fake_build(tmp_path / "b", hole=(0.7, 0.6, 50.0)))
+    for args, word in [((0.5, 0.5, 50.0), "nu=0.5"), ((0.7, 0.1, 50.0), "lam_ratio=0.1"),
+                       ((0.7, 0.995, 50.0), "lam_ratio=0.995"), ((0.7, 0.5, 2.0), "ca_b=2"),
+                       ((0.7, 0.5, 2e4), "ca_b=20000"), ((0.7, 0.55, 50.0), "hole"),
+                       ((0.75, 0.6, 50.0), "hole"), ((0.7, 0.6, 20.0), "hole")]:
+        res = query_map(*args, m)
+        for q in (*QUANTITIES, "shape_class"):
+            assert res[q] is None and word in res.quantities[q].note, (args, q, res.quantities[q])
+    assert query_map(0.7, 0.3, 50.0, m)["V_over_U"] is not None    # away from the hole
+
+
+def test_ca_b_above_the_map_is_clamped_with_the_measured_change_as_error(analytic_map):
+    top = query_map(0.7, 0.5, 500.0, analytic_map).quantities["dp_plus_R0"]
+    above = query_map(0.7, 0.5, 2000.0, analytic_map).quantities["dp_plus_R0"]
+    at50 = query_map(0.7, 0.5, 50.0, analytic_map).quantities["dp_plus_R0"]
+    assert above.value == top.value
+    assert above.model_error >= 0.99 * abs(top.value - at50.value) > 0
+    assert "Chen et al. 2020" in above.note
+
+
+def test_invalid_queries_raise_naming_the_parameter(analytic_map):
+    from lubrication.checks import CannotPassError, InvalidParameterError
+    with pytest.raises(CannotPassError, match="lam_ratio"):
+        query_map(0.7, 1.0, 50, analytic_map)
+    for args, name in [((1.2, 0.5, 50), "nu"), ((0.7, -0.1, 50), "lam_ratio"),
+                       ((0.7, 0.5, 0.0), "ca_b"), ((math.nan, 0.5, 50), "nu")]:
+        with pytest.raises(InvalidParameterError, match=name):
+            query_map(*args, analytic_map)
+
+
+def test_packed_file_is_compact_json_with_units_holes_and_loo(tmp_path):
+    path = _fake_build(tmp_path / "b", hole=(0.8, 0.4, 5.0))
+    data = json.loads(path.read_text())
+    assert data["format"] == "vesicle-tube solution map" and data["version"] == 1
+    assert {h["reason"] for h in data["holes"]} == {"no steady shape found"}
+    assert all(k in data["units"] for k in data["columns"])
+    assert "shape" not in data["columns"] and "modes" not in path.read_text()
+    assert any(v is not None for v in data["columns"]["loo_lam_dp_plus_R0"])
+
+
+# ----------------------------------------------------------------------------- a real tiny build
+
+TINY = dict(nu=[0.9, 0.95], lam_ratio=[0.9, 0.95, 0.98], ca_b=[50.0], methods=["lubrication"])
+TINY_OPTIONS = {"lubrication": {"tol": 1e-5}}
+
+
+@pytest.fixture(scope="module")
+def tiny_build(tmp_path_factory):
+    """Lubrication 2 nu x 3 lam/lam_c x 1 Ca_B, in this process (about 3 s)."""
+    folder = tmp_path_factory.mktemp("tiny")
+    summary = build_map(folder, make_grid(**TINY), options=TINY_OPTIONS, workers=1)
+    return folder, summary
+
+
+def test_tiny_lubrication_build_packs_and_queries_back_its_points(tiny_build):
+    folder, summary = tiny_build
+    assert summary["done"] == summary["total"] == 6 and summary["missing"] == 0
+    m = load_map(summary["map"])
+    for p in read_points(folder):
+        assert p["success"], p["message"]
+        assert p["provenance"]["solver"]["name"] == "lubrication.solve.solve_lubrication"
+        assert p["provenance"]["git_commit"] and p["provenance"]["vesicle-tube"]
+        res = query_map(p["nu"], p["lam_ratio"], p["ca_b"], m)
+        for q in QUANTITIES:
+            assert res[q] == pytest.approx(p[q], rel=1e-12), q
+        assert res["shape_class"] == p["shape_class"]
+    # between the points: within the (loose, 2-node) error bar of the tiny grid
+    mid = query_map(0.92, 0.96, 50.0, m).quantities["V_over_U"]
+    assert mid.value is not None and 1.0 < mid.value < 2.0 and mid.error > 0
+
+
+# ----------------------------------------------------------------------------- resume (in-process)
+
+CALLS = []
+
+
+def _fake_solver(nu, lam_ratio, ca_b, warm, options, max_time):
+    """Stands in for a solver: a known smooth answer, a shape, and the warm start it got."""
+    CALLS.append((nu, lam_ratio, ca_b, None if warm is None else
+                  (warm["lam_ratio"] if isinstance(warm, dict) else warm)))
+    ok = lam_ratio != 0.5
+    fields = {"success": ok, "message": "ok" if ok else "did not converge",
+              **{q: (truth(q, nu, lam_ratio, ca_b) if ok else None) for q in QUANTITIES},
+              "shape_class": "bullet" if ok else None,
+              "error_estimate": dict.fromkeys(QUANTITIES), "residual": 0.0,
+              "bie_solves": 1, "shape": {"modes": [0.1], "density": []} if ok else None}
+    return fields, (lam_ratio if ok else None)
+
+
+def test_resume_solves_only_the_missing_points_and_warm_starts_from_the_stored_shape(
+        tmp_path, monkeypatch):
+    monkeypatch.setitem(map_build.SOLVERS, "bem", _fake_solver)
+    grid = make_grid([0.9], [0.3, 0.4, 0.5, 0.6], [50.0], ["bem"])
+    CALLS.clear()
+    first = build_map(tmp_path, grid, workers=1)
+    assert [c[1] for c in CALLS] == [0.3, 0.4, 0.5, 0.6]
+    assert [c[3] for c in CALLS] == [None, 0.3, 0.4, 0.4]      # warm from last converged
+    assert first["failed"] == 1 and first["missing"] == 0
+    (tmp_path / point_filename("bem", 0.9, 0.6, 50.0)).unlink()
+    (tmp_path / point_filename("bem", 0.9, 0.3, 50.0)).unlink()
+    (tmp_path / ".bem_nu0.9_lr0.4_caB50.json.abc.tmp").write_text("{half")   # a killed write
+    CALLS.clear()
+    again = build_map(tmp_path, None, workers=1)      # resume: the stored grid
+    assert [c[1] for c in CALLS] == [0.3, 0.6]          # the failed 0.5 is not recomputed
+    # 0.6 warm-starts from the *stored* record of 0.4 (the last converged point on disk)
+    assert CALLS[1][3] == 0.4
+    assert again["new"] == 2 and again["done"] == 4
+    assert not list(tmp_path.glob(".*.tmp"))
+    CALLS.clear()
+    build_map(tmp_path, None, workers=1, retry_failed=True)
+    assert [c[1] for c in CALLS] == [0.5]
+
+
+def test_a_folder_of_another_grid_is_refused(tmp_path, monkeypatch):
+    from lubrication.checks import InvalidParameterError
+    monkeypatch.setitem(map_build.SOLVERS, "bem", _fake_solver)
+    build_map(tmp_path, make_grid([0.9], [0.3], [50.0], ["bem"]), workers=1)
+    with pytest.raises(InvalidParameterError, match="another grid"):
+        build_map(tmp_path, make_grid([0.8], [0.3], [50.0], ["bem"]), workers=1)
