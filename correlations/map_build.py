@@ -274,8 +274,9 @@ def _connect(scheduler: str):
 def _stop(executor) -> None:
     """Stop a process pool at once: cancel queued lines and terminate the running workers
     (their finished points are complete files; the point being solved is lost)."""
+    workers = list((getattr(executor, "_processes", None) or {}).values())
     executor.shutdown(wait=False, cancel_futures=True)
-    for proc in list(getattr(executor, "_processes", {}).values()):
+    for proc in workers:
         proc.terminate()
 
 

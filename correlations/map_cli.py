@@ -87,6 +87,9 @@ def cmd_map_pack(args):
     if target is not None:
         if Path(target).is_dir():
             raise UsageError(f"--out {target}: this is a folder; give a file name")
+        if not Path(target).parent.is_dir():
+            raise UsageError(f"--out {target}: the folder {str(Path(target).parent)!r} does "
+                             "not exist")
         check_output_dir("--out", str(Path(target).parent))
     if not (Path(args.folder) / "build.json").is_file():
         raise UsageError(f"DIR {args.folder}: not a build folder of 'vesicle-tube map build' "

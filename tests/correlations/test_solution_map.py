@@ -231,3 +231,26 @@ def test_a_folder_of_another_grid_is_refused(tmp_path, monkeypatch):
     build_map(tmp_path, make_grid([0.9], [0.3], [50.0], ["bem"]), workers=1)
     with pytest.raises(InvalidParameterError, match="another grid"):
         build_map(tmp_path, make_grid([0.8], [0.3], [50.0], ["bem"]), workers=1)
+
+
+@pytest.mark.slow
+def test_a_cheap_bem_line_stores_shapes_and_resumes_from_them(tmp_path):
+    """One real BEM line, nu = 0.98, lam/lam_c = 0.3, 0.4, 8 modes, loose tolerances (about
+    30 s with numba compilation): the shapes are stored, the pack holds the points, and a
+    resumed line warm-starts from the stored shape."""
+    grid = make_grid([0.98], [0.3, 0.4], [50.0], ["bem"])
+    options = {"bem": {"n_modes": 8, "tol": 5e-2, "residual_tol": 1e-2}}
+    summary = build_map(tmp_path, grid, options=options, workers=1)
+    points = {p["lam_ratio"]: p for p in read_points(tmp_path)}
+    assert all(p["success"] for p in points.values()), [p["message"] for p in points.values()]
+    assert points[0.4]["seed"] == "initial" and len(points[0.4]["shape"]["modes"]) == 8
+    assert points[0.3]["error_estimate"]["V_over_U"] is not None
+    m = load_map(summary["map"])
+    res = query_map(0.98, 0.4, 50.0, m)
+    assert res["dp_plus_R0"] == pytest.approx(points[0.4]["dp_plus_R0"], rel=1e-12)
+    assert res.quantities["dp_plus_R0"].solver_error > 0
+    (tmp_path / point_filename("bem", 0.98, 0.4, 50.0)).unlink()
+    again = build_map(tmp_path, None, options=options, workers=1)
+    redo = {p["lam_ratio"]: p for p in read_points(tmp_path)}[0.4]
+    assert again["new"] == 1 and redo["success"] and redo["seed"] == "initial"
+    assert redo["dp_plus_R0"] == pytest.approx(points[0.4]["dp_plus_R0"], rel=5e-2)

@@ -1,0 +1,215 @@
+"""``vesicle-tube map``: bad input (exit 2, one line), Ctrl-C and SIGKILL during a parallel
+build followed by a resume that solves only the missing points, and Dask distributed builds.
+
+The interrupted builds run as their own process with a stand-in solver (0.4 s per point, each
+call logged) patched into correlations.map_build.SOLVERS before the command starts; the process
+pool forks, so its workers use it too.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from cli_helpers import strict_json
+from test_solution_map import TINY, TINY_OPTIONS, _fake_build, _fake_solver
+
+from correlations import map_build
+from correlations.map_build import build_map, make_grid
+from correlations.solution_map import read_points
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def packed(tmp_path_factory):
+    return str(_fake_build(tmp_path_factory.mktemp("cli")))
+
+
+# ----------------------------------------------------------------------------- bad input
+
+@pytest.mark.parametrize("argv, option", [
+    (["--nu", "0.5", "--lam-ratio", "0.5", "--ca-b", "50"], "--nu"),
+    (["--nu", "0.7", "--lam-ratio", "1.0", "--ca-b", "50"], "--lam-ratio"),
+    (["--nu", "0.7", "--lam", "5", "--ca-b", "50"], "--lam"),
+    (["--nu", "0.7", "--lam-ratio", "0.5", "--ca-b", "0"], "--ca-b"),
+    (["--nu", "0.7", "--lam-ratio", "0.5", "--ca-b", "1"], "--ca-b"),
+    (["--nu", "0.7", "--lam-ratio", "0.5"], "--ca-b"),
+])
+def test_query_outside_the_map_exits_2_naming_the_option(cli_usage_error, packed, argv, option):
+    line = cli_usage_error("map", "query", *argv, "--map", packed)
+    assert option in line
+
+
+def test_query_prints_values_with_error_bars(cli, packed):
+    code, out, err = cli("map", "query", "--nu", "0.75", "--lam-ratio", "0.95", "--ca-b", "60",
+                         "--map", packed, "--json")
+    assert code == 0, err
+    data = strict_json(out)
+    q = data["quantities"]["dp_plus_R0"]
+    assert q["value"] == data["dp_plus_R0"] > 0 and q["error"] > 0
+    assert q["methods"] == ["lubrication"] or "lubrication" in q["methods"]
+    code, out, err = cli("map", "query", "--nu", "0.75", "--lam-ratio", "0.95", "--ca-b", "60",
+                         "--map", packed)
+    assert code == 0 and "dp_plus_R0" in out and "+-" in out
+
+
+@pytest.mark.parametrize("content", ["{not json", json.dumps({"a": 1}),
+                                     json.dumps({"format": "vesicle-tube solution map",
+                                                 "version": 1, "grid": {}, "columns": {}})])
+def test_corrupt_or_foreign_map_file_exits_2_naming_map(cli_usage_error, tmp_path, content):
+    bad = tmp_path / "map.json"
+    bad.write_text(content)
+    line = cli_usage_error("map", "query", "--nu", "0.7", "--lam-ratio", "0.5", "--ca-b", "50",
+                           "--map", str(bad))
+    assert "--map" in line and str(bad) in line
+
+
+def test_no_shipped_map_is_reported_cleanly(cli_usage_error, monkeypatch, tmp_path):
+    from correlations import solution_map
+    monkeypatch.setattr(solution_map, "DEFAULT_MAP", tmp_path / "absent.json")
+    line = cli_usage_error("map", "query", "--nu", "0.7", "--lam-ratio", "0.5", "--ca-b", "50")
+    assert "no map shipped" in line
+
+
+def test_build_bad_input_exits_2_before_any_work(cli_usage_error, tmp_path, monkeypatch):
+    monkeypatch.setattr(map_build, "SCHEDULER_TIMEOUT_S", 1)
+    monkeypatch.setitem(map_build.SOLVERS, "bem", _fake_solver)
+    a_file = tmp_path / "file"
+    a_file.write_text("x")
+    cases = [(["--out", str(tmp_path / "d"), "--scheduler", "tcp://127.0.0.1:9"], "--scheduler"),
+             (["--out", str(a_file)], "--out"),
+             (["--out", str(tmp_path / "d"), "--nu", "1.5"], "--nu"),
+             (["--out", str(tmp_path / "d"), "--ca-b", "-1"], "--ca-b"),
+             (["--out", str(tmp_path / "d"), "--lam-ratio", "1"], "--lam-ratio")]
+    for argv, option in cases:
+        assert option in cli_usage_error("map", "build", *argv)
+        assert not (tmp_path / "d").exists()
+    build_map(tmp_path / "old", make_grid([0.9], [0.3], [50.0], ["bem"]), workers=1)
+    line = cli_usage_error("map", "build", "--out", str(tmp_path / "old"), "--nu", "0.8",
+                           "--methods", "bem")
+    assert "--out" in line and "another grid" in line
+
+
+def test_pack_bad_input_exits_2(cli_usage_error, tmp_path):
+    assert "DIR" in cli_usage_error("map", "pack", str(tmp_path))
+    _fake_build(tmp_path / "b")
+    assert "--out" in cli_usage_error("map", "pack", str(tmp_path / "b"), "--out",
+                                      str(tmp_path / "no" / "such" / "x.json"))
+
+
+# ----------------------------------------------------------------------------- interrupt, resume
+
+STAND_IN = """
+import sys, time
+from correlations import map_build
+from correlations.solution_map import QUANTITIES
+log = sys.argv[1]
+def stand_in(nu, lam_ratio, ca_b, warm, options, max_time):
+    with open(log, "a") as f:
+        f.write(f"{nu} {lam_ratio}\\n")
+    time.sleep(0.4)
+    return ({"success": True, "message": "ok", **{q: 1.0 + lam_ratio for q in QUANTITIES},
+             "shape_class": "bullet", "error_estimate": {}, "residual": 0.0, "bie_solves": 0,
+             "shape": None}, None)
+map_build.SOLVERS["lubrication"] = stand_in
+from correlations.cli import main
+sys.exit(main(sys.argv[2:]))
+"""
+GRID = ["--methods", "lubrication", "--nu", "0.8", "0.9", "--lam-ratio", "0.9", "0.92", "0.94",
+        "0.96", "--ca-b", "50", "--workers", "2"]
+
+
+def _start(log, out):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.Popen([sys.executable, "-c", STAND_IN, str(log), "map", "build", "--out",
+                             str(out), *GRID], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=env, start_new_session=True)
+
+
+def _wait_for_points(out, n, proc, timeout=30.0):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if out.exists() and len(list(out.glob("lubrication_*.json"))) >= n:
+            return
+        assert proc.poll() is None, proc.communicate()
+        time.sleep(0.05)
+    pytest.fail("no points written")
+
+
+def _calls(log):
+    return log.read_text().splitlines() if log.exists() else []
+
+
+def _check_complete(out):
+    assert not list(out.glob(".*")), list(out.glob(".*"))
+    for p in out.glob("*.json"):
+        json.loads(p.read_text())                  # every file complete
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL])
+def test_interrupted_build_resumes_with_only_the_missing_points(tmp_path, sig):
+    out, log = tmp_path / "build", tmp_path / "calls.txt"
+    proc = _start(log, out)
+    _wait_for_points(out, 2, proc)
+    t0 = time.monotonic()
+    os.killpg(proc.pid, sig)                       # a terminal's Ctrl-C reaches the group
+    _, err = proc.communicate(timeout=30)
+    if sig == signal.SIGINT:
+        assert proc.returncode == 130, err
+        assert time.monotonic() - t0 < 3.0
+        last = err.strip().splitlines()[-1]
+        assert "interrupted" in last and "resume" in last and "Traceback" not in err
+    else:
+        assert proc.returncode == -signal.SIGKILL
+        for f in out.glob(".*.tmp"):               # a write cut by SIGKILL stays a temporary
+            f.unlink()
+    time.sleep(0.5)                                # orphaned workers (none expected) would write
+    _check_complete(out)
+    stored = len(read_points(out))
+    assert 2 <= stored < 8
+    log.write_text("")
+    proc = _start(log, out)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert len(_calls(log)) == 8 - stored, (_calls(log), stored)
+    assert len(read_points(out)) == 8 and (out / "solution_map.json").exists()
+    _check_complete(out)
+
+
+# ----------------------------------------------------------------------------- Dask
+
+def test_dask_threads_cluster_builds_the_same_map_as_the_serial_build(tmp_path, monkeypatch):
+    """Fast representative check: an in-process LocalCluster (threads) with the stand-in."""
+    distributed = pytest.importorskip("dask.distributed")
+    monkeypatch.setitem(map_build.SOLVERS, "bem", _fake_solver)
+    grid = make_grid([0.8, 0.9], [0.3, 0.4], [50.0], ["bem"])
+    serial = build_map(tmp_path / "serial", grid, workers=1)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        dask = build_map(tmp_path / "dask", grid, scheduler=cluster.scheduler_address)
+    assert dask["done"] == serial["done"] == 4 and dask["new"] == 4
+    a, b = (json.loads(Path(s["map"]).read_text())["columns"] for s in (serial, dask))
+    assert a["dp_plus_R0"] == b["dp_plus_R0"] and a["nu"] == b["nu"]
+
+
+@pytest.mark.slow
+def test_dask_process_cluster_builds_the_tiny_lubrication_map_like_the_serial_build(tmp_path):
+    """A 2-worker LocalCluster of processes and the real lubrication solver (about 20 s)."""
+    distributed = pytest.importorskip("dask.distributed")
+    grid = make_grid(**TINY)
+    serial = build_map(tmp_path / "serial", grid, options=TINY_OPTIONS, workers=1)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        dask = build_map(tmp_path / "dask", grid, options=TINY_OPTIONS,
+                         scheduler=cluster.scheduler_address)
+    a, b = (json.loads(Path(s["map"]).read_text())["columns"] for s in (serial, dask))
+    assert a["nu"] == b["nu"] and a["lam_ratio"] == b["lam_ratio"]
+    for q in ("V_over_U", "dp_plus_R0", "film_min", "tension_max"):
+        assert b[q] == pytest.approx(a[q], rel=1e-5), q      # solver tolerance 1e-5
