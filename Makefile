@@ -27,6 +27,7 @@ validation: $(BIN)/vesicle-tube
 benchmark: $(BIN)/vesicle-tube
 	$(BIN)/python tests/benchmarks/run_benchmarks.py
 	$(BIN)/python tests/benchmarks/bench_vesicle.py
+	$(BIN)/python tests/benchmarks/bench_solution_map.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -345,15 +345,13 @@ class SolutionMap:
                 parts[i] = inner(i)
                 if isinstance(parts[i], str):
                     return parts[i]
-            for i in ([below[-2]] if len(below) > 1 else []) + ([above[1]] if len(above) > 1
-                                                                  else []):
+            extra = ([below[-2]] if len(below) > 1 else []) + ([above[1]] if len(above) > 1
+                                                                 else [])
+            for i in sorted(extra, key=lambda i: abs(coords[i] - x)):   # the nearest usable
                 p = inner(i)
                 if not isinstance(p, str):
                     parts[i] = p
-            if len(parts) > 3:              # keep the third node nearest to x
-                far = max((i for i in parts if i not in (below[-1], above[0])),
-                          key=lambda i: abs(coords[i] - x))
-                del parts[far]
+                    break
         else:
             parts = {}
             for i in sorted(idx, key=lambda i: abs(coords[i] - x)):
