@@ -231,7 +231,7 @@ def solve_line(folder, method, nu, ca_b, lam_ratios, stored, options, max_time, 
         record, warm_next = _point(method, nu, r, ca_b, warm, options.get(method, {}),
                                    max_time, provenance)
         atomic_write(folder / point_filename(method, nu, r, ca_b),
-                     lambda f: json.dump(record, f, indent=1, allow_nan=False))
+                     lambda f, rec=record: json.dump(rec, f, indent=1, allow_nan=False))
         if warm_next is not None:
             warm = warm_next
         new.append(record)
@@ -245,7 +245,7 @@ def solve_line(folder, method, nu, ca_b, lam_ratios, stored, options, max_time, 
 def _git_commit() -> str:
     try:
         out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
-                             capture_output=True, text=True, timeout=5)
+                             capture_output=True, text=True, timeout=5, check=False)
         return out.stdout.strip() or "unknown"
     except (OSError, subprocess.SubprocessError):
         return "unknown"
@@ -444,8 +444,8 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
                         path = Path(folder) / point_filename(record["method"], record["nu"],
                                                              record["lam_ratio"], record["ca_b"])
                         if not path.exists():
-                            atomic_write(path, lambda fh: json.dump(record, fh, indent=1,
-                                                                    allow_nan=False))
+                            atomic_write(path, lambda fh, rec=record: json.dump(
+                                rec, fh, indent=1, allow_nan=False))
                 except Exception as exc:    # noqa: BLE001 - a crashed line is reported
                     state["errors"].append(f"line {line}: {type(exc).__name__}: {exc}")
                     log.error("map build: line %s raised %s", line, exc)

@@ -284,8 +284,8 @@ class SolutionMap:
             if k in self._row:
                 return self._row[k], ""
             reasons.append(f"{method}: {self._hole.get(k, 'not computed')}")
-        return None, ("hole at nu=%.6g, lam/lam_c=%.6g, Ca_B=%.6g (%s)"
-                      % (nu, lam_ratio, ca_b, "; ".join(reasons) or "no point"))
+        why = "; ".join(reasons) or "no point"
+        return None, f"hole at nu={nu:.6g}, lam/lam_c={lam_ratio:.6g}, Ca_B={ca_b:.6g} ({why})"
 
     def value(self, row: int, q: str):
         v = self.columns[q][row]
