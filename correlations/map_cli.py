@@ -68,7 +68,9 @@ def cmd_map_build(args):
             print(f"vesicle-tube map build: interrupted; {n} points stored in {args.out} (every "
                   "file complete); run the same command again to resume", file=sys.stderr)
             raise SystemExit(EXIT_INTERRUPTED) from None
-    out = {"command": "map build", "converged": True, "out": str(args.out), **out}
+    out = {"command": "map build", "converged": not out["errors"], "out": str(args.out), **out}
+    if out["errors"]:       # a line task crashed (not a failed point: those are stored holes)
+        out["message"] = "; ".join(out["errors"])
     if out["failed"]:
         out["warnings"] = [f"{out['failed']} points failed (holes of the map, with their "
                            "reasons in the packed file)"]
