@@ -32,7 +32,8 @@ __all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere", "cmd_bem_vesicle"
 #: API parameter -> command-line option, for the messages of invalid input
 _OPTIONS = {"lam": "--lam", "lam_ratio": "--lam-ratio", "lams": "--lam", "lam_ratios":
             "--lam-ratio", "ca": "--ca", "ca_b": "--ca-b", "nu": "--nu", "panels": "--panels",
-            "tol": "--tol", "residual_tol": "--residual-tol", "n_modes": "--modes",
+            "tol": "--tol", "tension_tol": "--tension-tol", "residual_tol": "--residual-tol",
+            "n_modes": "--modes",
             "max_modes": "--max-modes", "max_time": "--max-time"}
 
 
@@ -145,7 +146,8 @@ def cmd_bem_drop(args):
 
 
 def _vesicle_solver_options(args) -> dict:
-    return {"n_modes": args.modes, "tol": args.tol, "residual_tol": args.residual_tol,
+    return {"n_modes": args.modes, "tol": args.tol, "tension_tol": args.tension_tol,
+            "residual_tol": args.residual_tol,
             "max_modes": args.max_modes}
 
 
@@ -306,15 +308,18 @@ def _vesicle_options(p, sweep: bool) -> None:
     p.add_argument("--n-modes", "--modes", type=positive_int, dest="modes",
                    help="shape modes of the fine mesh, 8 to 96 (default: automatic refinement)")
     p.add_argument("--tol", type=finite_float, default=1e-4,
-                   help="relative tolerance of the refinement pair in V/U, dp+ and "
-                        "gamma_max, 1e-12 to 0.5 (default 1e-4) [-]")
-    p.add_argument("--residual-tol", type=finite_float, default=1e-4, dest="residual_tol",
+                   help="relative tolerance of the estimated discretisation error of V/U and "
+                        "dp+, 1e-12 to 0.5 (default 1e-4) [-]")
+    p.add_argument("--tension-tol", type=finite_float, default=1e-2, dest="tension_tol",
+                   help="relative tolerance of the estimated error of gamma_max, 1e-12 to 0.5 "
+                        "(default 1e-2) [-]")
+    p.add_argument("--residual-tol", type=finite_float, default=1e-3, dest="residual_tol",
                    help="tolerance of the steady residual max|u - V e_x|, 1e-14 to 10 "
-                        "(default 1e-4) [U]")
+                        "(default 1e-3) [U]")
     p.add_argument("--max-modes", type=positive_int, default=None, dest="max_modes",
                    help="largest number of shape modes of the automatic refinement, 24 to 96 "
-                        "(default 40, or ~6 per tube radius of length for long vesicles, 64 at "
-                        "nu = 0.6 near lam_c; near lam_c use --tol 1e-2 --residual-tol 5e-3)")
+                        "(default 80, or for a long vesicle 40 more than the level where its "
+                        "density is re-built, ~6 per tube radius of length)")
     add_max_time_option(p)
 
 

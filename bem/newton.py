@@ -318,7 +318,7 @@ def _promised(J, F, norm):
 def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 300,
                                fd_step: float = 1e-7, max_jacobians: int = 4,
                                directions: int = 3, promise: float = 1e-2,
-                               start=None, deadline=None) -> LMReport:
+                               start=None, jacobian=None, deadline=None) -> LMReport:
     r"""Minimise |F(z)| along a long, curved valley (interface as :func:`levenberg_marquardt`).
 
     Why: near lam_c a long vesicle has one slow shape mode (volume moved between the rear and
@@ -340,15 +340,18 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
     less than a ``promise`` relative decrease of |F|^2 (the residual floor of the
     overdetermined equations), or its step is below ``tol`` (a small step of an updated
     Jacobian, with large damping, proves nothing). At most ``max_jacobians`` difference
-    Jacobians. ``deadline``: wall-time budget (module docstring).
+    Jacobians. ``jacobian``: an approximate Jacobian at ``z0`` (e.g. prolonged from a coarser
+    discretisation) used in place of the first difference Jacobian (it is not counted; the
+    floor is still certified with a fresh one). ``deadline``: wall-time budget (module
+    docstring).
     """
     return _within_budget(_valley_levenberg_marquardt, fun, z0, deadline, start, tol=tol,
                           max_iter=max_iter, fd_step=fd_step, max_jacobians=max_jacobians,
-                          directions=directions, promise=promise)
+                          directions=directions, promise=promise, jacobian=jacobian)
 
 
 def _valley_levenberg_marquardt(fun, z0, *, tol, max_iter, fd_step, max_jacobians,
-                                directions, promise, start) -> LMReport:
+                                directions, promise, start, jacobian) -> LMReport:
     """The iteration of :func:`valley_levenberg_marquardt`."""
     z = np.array(z0, dtype=float)
     first = _initial_state(fun, z, start)
@@ -366,7 +369,10 @@ def _valley_levenberg_marquardt(fun, z0, *, tol, max_iter, fd_step, max_jacobian
         n_eval, n_jac = n_eval + n, n_jac + 1
         return J
 
-    J, fresh = fresh_jacobian(), True
+    if jacobian is None:
+        J, fresh = fresh_jacobian(), True
+    else:
+        J, fresh = np.array(jacobian, dtype=float), False
 
     def evaluate(zz):
         nonlocal n_eval
@@ -443,4 +449,4 @@ def _valley_levenberg_marquardt(fun, z0, *, tol, max_iter, fd_step, max_jacobian
         n_eval += n
     else:
         message = f"no convergence in {max_iter} iterations (residual norm {norm:.2e})"
-    return LMReport(success, message, z, F, payload, it, n_eval, n_jac, history)
+    return LMReport(success, message, z, F, payload, it, n_eval, n_jac, history, J)

@@ -66,7 +66,7 @@ DEFAULT_GRID = {
 }
 
 #: Solver options per method (keyword arguments of solve_vesicle / solve_lubrication); the
-#: empty BEM set means its automatic refinement to tol = residual_tol = 1e-4.
+#: empty BEM set means its automatic refinement at the solver's default tolerances.
 DEFAULT_OPTIONS = {"bem": {}, "lubrication": {"tol": 1e-7}}
 
 
@@ -105,8 +105,12 @@ def make_grid(nu=None, lam_ratio=None, ca_b=None, methods=None) -> dict:
 
 
 def line_tasks(grid: dict) -> list[tuple[str, float, float]]:
-    """The lines (method, ν, Ca_B) of a grid, BEM first (the long ones start first)."""
-    return [(m, nu, ca) for m in grid["methods"] for nu in grid["nu"] for ca in grid["ca_b"]]
+    """The lines (method, ν, Ca_B) of a grid in build order: lubrication first (seconds per
+    line), then BEM by Ca_B nearest to 50 (Chen et al.'s value and the red-blood-cell default,
+    so that an interrupted build has the most used slice first), ν from large to small."""
+    lines = [(m, nu, ca) for m in grid["methods"] for nu in grid["nu"] for ca in grid["ca_b"]]
+    return sorted(lines, key=lambda t: (t[0] != "lubrication", abs(math.log(t[2] / 50.0)),
+                                        -t[1]))
 
 
 # --------------------------------------------------------------------------- one point
