@@ -173,7 +173,7 @@ def cmd_bem_vesicle(args):
             ("speed V", out["V_over_U"], "U", method, pm("V_over_U")),
             ("extra pressure drop dp+", out["dp_plus_R0"], "eta U/R0", method,
              pm("dp_plus_R0")),
-            ("length L", out["ell"], "R", method, ""),
+            ("length L (front pole to rearmost point)", out["ell"], "R", method, ""),
             ("smallest gap h", out["film_min"], "R", method, ""),
             ("largest tension gamma_max", out["tension_max"], "eta U", method,
              pm("tension_max")),

@@ -306,8 +306,10 @@ class VesicleResult:
         Vesicle velocity over U [-].
     dp_plus_R0, dp_plus_R : float
         Extra pressure drop at fixed flow rate, Δp⁺R0/(ηU) and Δp⁺R/(ηU) [-].
-    ell, film_min : float
-        Length L/R and smallest gap 1 − max r [R].
+    ell, ell_poles, film_min : float
+        Length L/R, the full axial extent from the front pole to the rearmost point (the rim
+        of a parachute; what a microscope measures and Chen et al.'s ℓ), the pole-to-pole
+        distance, and the smallest gap 1 − max r [R].
     tension_max, tension_rear, tension_front : float
         Largest tension and its pole values [ηU].
     wall_shear_max : float
@@ -347,6 +349,7 @@ class VesicleResult:
     dp_plus_R0: float = math.nan
     dp_plus_R: float = math.nan
     ell: float = math.nan
+    ell_poles: float = math.nan
     film_min: float = math.nan
     tension_max: float = math.nan
     wall_shear_max: float = math.nan
@@ -401,13 +404,14 @@ class VesicleResult:
                                     density=self.density)
 
     _SCALARS = ("nu", "lam", "lam_c", "ca_b", "success", "message", "V_over_U", "dp_plus_R0",
-                "dp_plus_R", "ell", "film_min", "tension_max", "wall_shear_max",
+                "dp_plus_R", "ell", "ell_poles", "film_min", "tension_max", "wall_shear_max",
                 "tension_rear", "tension_front",
                 "curvature_rear", "curvature_front", "shape_class", "error_estimate",
                 "volume_error", "area_error", "residual", "tol", "residual_tol", "panels",
                 "refinement", "seed", "iterations", "timings", "provenance")
     #: physical outputs, None in the output of an unconverged result
-    PHYSICAL = ("V_over_U", "dp_plus_R0", "dp_plus_R", "ell", "film_min", "tension_max",
+    PHYSICAL = ("V_over_U", "dp_plus_R0", "dp_plus_R", "ell", "ell_poles", "film_min",
+                "tension_max",
                 "wall_shear_max", "tension_rear", "tension_front", "curvature_rear",
                 "curvature_front", "shape_class")
 

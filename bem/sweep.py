@@ -63,7 +63,7 @@ SWEEP_COLUMNS = (
     ("ca_b", "bending capillary number eta U R0^2/kappa [-]"),
     ("V_over_U", "vesicle velocity over the mean velocity [-]"),
     ("dp_plus_R0", "extra pressure drop dp+ R0/(eta U) [-]"),
-    ("ell", "length L/R [-]"),
+    ("ell", "length L/R, front pole to rearmost point [-]"),
     ("film_min", "smallest gap 1 - max r/R [-]"),
     ("tension_max", "largest membrane tension gamma_max/(eta U) [-]"),
     ("wall_shear_max", "largest wall shear stress tau_w R/(eta U) = shear rate R/U [-]"),

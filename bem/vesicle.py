@@ -83,10 +83,10 @@ Ladder and error estimate (automatic refinement, ``n_modes`` None):
   vesicles) or 2/3 of the modes, was 10–250 times the true error, and the solve reported "not
   converged" at (0.8, 1.0), (0.6, 1.5) and (0.7, 1.5) with answers right to 1e-5–1e-3.
 
-Seeds and branches. Near lam_c (λ/λc > ``NEAR_CRITICAL`` = 0.9) every vesicle is reached by
-continuation in λ/λc (rungs 0.9, 0.95, 0.975, ..., each a ``rung_modes`` = 32 solve from the
-previous one, the first from lubrication): a cold start from the lubrication shape at the
-target can end in a spurious least-squares minimum (at (0.7, 0.95 λc): residual 2.1e-2 at every
+Seeds and branches. Near lam_c (λ/λc > ``NEAR_CRITICAL`` = 0.9) a vesicle of estimated length
+up to ``RUNG_MAX_LENGTH`` = 9 R is reached by continuation in λ/λc (rungs 0.9, 0.95, 0.975,
+..., each a ``rung_modes`` = 32 solve from the previous one, the first from lubrication): a
+cold start from the lubrication shape at the target can end in a spurious least-squares minimum (at (0.7, 0.95 λc): residual 2.1e-2 at every
 mode count, V/U 1.09, Δp⁺ 600, where the state reached by the rungs has V/U 1.0503, Δp⁺ 403,
 residual 2.2e-4 at 56 modes; lubrication 1.0504, 391). Below, the seed is the lubrication shape
 at the target or, where the lubrication branch ends above it, at 0.9 λc
@@ -103,7 +103,8 @@ Solver paths, before → after (each remaining one with its reason):
   (2n/3, n) (given ``n_modes``) → one consistent ladder with an extrapolated estimate; the
   carriers stay for a long vesicle's cold start, the pair for a given ``n_modes`` (its
   estimate is the pair difference, an overestimate).
-* continuation rungs: short vesicles near lam_c only → every vesicle near lam_c (above).
+* continuation rungs: short vesicles near lam_c only (ℓ ≤ 5) → vesicles near lam_c up to
+  ℓ = 9 (``RUNG_MAX_LENGTH``; longer ones from their own lubrication shape, measured above).
 * Levenberg–Marquardt: plain, or the valley variant for long vesicles (kept: the plain method
   stops on the valley's side, γ_max 799 instead of 932 at (0.6, 1.94), 64 modes); the
   prolonged Jacobian now serves both (before: plain only).
@@ -548,6 +549,14 @@ LONG_VESICLE = 5.0
 #: lam/lam_c from which :func:`solve_vesicle` uses the film density and continuation by default
 NEAR_CRITICAL = 0.9
 
+#: estimated length ℓ ≈ ℓc λ/λc [R] above which a vesicle near lam_c is not reached by
+#: continuation rungs but from the lubrication shape at its own λ through carrier levels:
+#: measured, (0.7, 0.95 λc), ℓ = 7.3, needs the rungs (from its own lubrication shape it ends
+#: in a spurious minimum, residual 2e-2), while (0.6, 0.98 λc), ℓ = 10.8, is led astray by
+#: 32-mode rungs (residual 1e-2 at each rung; at the target Δp⁺ 2818 at 40 modes, against
+#: 1778 mode-converged) and converges from its own lubrication shape
+RUNG_MAX_LENGTH = 9.0
+
 #: level (index in the ladder 16, 24, ...) on whose BEM shape the density is re-built for the
 #: rest of a short vesicle's automatic ladder (the seed's density family; "bend" for uniform)
 REBUILD_LEVEL = 0
@@ -595,11 +604,38 @@ def _outputs(nu, lam, op: VesicleOperator, st: dict) -> dict:
     area = float(2.0 * math.pi * np.sum(rb * wb))
     xr, xf = curve.extent()
     return {"V_over_U": st["V"], "dp_plus_R": st["dp"], "dp_plus_R0": st["dp"] * lam,
-            "ell": xf - xr, "film_min": 1.0 - curve.max_radius(), "residual": st["residual"],
+            "ell": xf - _rearmost(curve), "ell_poles": xf - xr,
+            "film_min": 1.0 - curve.max_radius(), "residual": st["residual"],
             "volume_error": abs(vol / op.volume - 1.0), "area_error": abs(area / op.area - 1.0),
-            "tension_max": float(np.max(tension_profile(curve, st["g"],
-                                                        np.linspace(0, 1, 401))[0])),
+            "tension_max": _tension_max(curve, st["g"]),
             "panels": op.panel_counts | {"tension": op.n_tension}}
+
+
+def _refined_extremum(f, n: int = 401) -> tuple[float, float]:
+    """(tau, f) of the largest value of the smooth function ``f`` on [0, 1]: the best of ``n``
+    equally spaced samples, refined by a bounded scalar search between its neighbours (a
+    sampled maximum differs between parametrisations by its sampling error, 1e-5 relative for
+    γ_max at 401 samples, which the refinement pair would read as discretisation error)."""
+    from scipy.optimize import minimize_scalar
+
+    t = np.linspace(0.0, 1.0, n)
+    v = f(t)
+    i = int(np.argmax(v))
+    lo, hi = t[max(i - 1, 0)], t[min(i + 1, n - 1)]
+    res = minimize_scalar(lambda x: -float(f(np.array([x]))[0]), bounds=(lo, hi),
+                          method="bounded", options={"xatol": 1e-12})
+    return (float(res.x), -float(res.fun)) if -res.fun > v[i] else (float(t[i]), float(v[i]))
+
+
+def _tension_max(curve: SpectralCurve, g) -> float:
+    """Largest membrane tension [ηU] (:func:`_refined_extremum`)."""
+    return _refined_extremum(lambda t: tension_profile(curve, g, t)[0])[1]
+
+
+def _rearmost(curve: SpectralCurve) -> float:
+    """Axial position of the rearmost point of the membrane [R]: the rear pole of a bullet, the
+    rim of a parachute (:func:`_refined_extremum` of -x)."""
+    return -_refined_extremum(lambda t: -curve.position(t)[0])[1]
 
 
 _KEYS = ("V_over_U", "dp_plus_R0", "tension_max")
@@ -810,7 +846,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     ell = critical_length(nu) * ratio                # estimated length L/R (Chen eq. sL)
     long = ell > LONG_VESICLE
     if continuation is None:
-        continuation = initial is None and ratio > NEAR_CRITICAL
+        continuation = initial is None and ratio > NEAR_CRITICAL and ell <= RUNG_MAX_LENGTH
     if valley is None:
         valley = long
     if density == "auto":
@@ -917,13 +953,16 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             prev = fit_curve(prev.sample, 0.0, 1.0, n,
                              density=_DENSITIES[rebuilt](prev, density_terms))
             consistent = len(levels)
+        # a carrier starts from a fresh difference Jacobian: one prolonged from the (unfinished)
+        # level below led the cold start of (0.6, 1.94) to Δp⁺ 2829 at 32 modes (1778 converged)
+        carrier = rebuild is not None and valley and i < rebuild
         try:
             st, op, info = _solve_level(nu, lam, ca_b, disc, prev, n, xtol=xtol,
                                         max_iter=max_iter, seed_level=not levels,
                                         valley=valley,
-                                        carrier=rebuild is not None and valley and i < rebuild,
-                                        deadline=deadline,
-                                        coarse=(levels[-1][1], levels[-1][0]) if levels else None)
+                                        carrier=carrier, deadline=deadline,
+                                        coarse=(levels[-1][1], levels[-1][0])
+                                        if levels and not carrier else None)
         except InvalidParameterError as exc:
             message = f"level with {n} modes: {exc}"
             break
@@ -993,7 +1032,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     return VesicleResult(
         nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=success, message=message,
         V_over_U=fine["V_over_U"], dp_plus_R0=fine["dp_plus_R0"], dp_plus_R=fine["dp_plus_R"],
-        ell=fine["ell"], film_min=fine["film_min"], tension_max=fine["tension_max"],
+        ell=fine["ell"], ell_poles=fine["ell_poles"], film_min=fine["film_min"],
+        tension_max=fine["tension_max"],
         wall_shear_max=float(np.max(wall_shear)) if wall_shear.size else math.nan,
         wall_x=wall_x, wall_shear=wall_shear,
         tension_rear=float(prof["tension"][0]), tension_front=float(prof["tension"][-1]),

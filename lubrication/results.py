@@ -67,7 +67,8 @@ class LubricationResult:
         ``success`` (all acceptance checks passed), ``message``.
     Scalars
         ``V_over_U``; ``Q`` = 1 − U/V; ``dp_plus_R0`` = Δp⁺R0/(ηU); ``dp_plus_R`` = Δp⁺R/(ηU);
-        ``ell`` = L/R; ``film_min`` minimum gap h/R; ``tension_front``, ``tension_rear``,
+        ``ell`` = L/R, front pole to rearmost point; ``film_min`` minimum gap h/R;
+        ``tension_front``, ``tension_rear``,
         ``tension_max`` [ηU]; ``curvature_rear``, ``curvature_front`` principal curvature at the
         poles [1/R] (negative = convex); ``shape_class`` "parachute" if the rear is concave
         (curvature_rear > 0, or the rear pole lies ahead of the rearmost point of the membrane,
