@@ -7,8 +7,10 @@ checks the inputs). Kernels of one family share one signature:
 
 * pointwise elliptic integrals ``f(m1) -> float`` of the complementary parameter ``m1 = 1 - m``;
 * pointwise ring Stokeslet ``ring_stokeslet(x0, r0, x, r) -> (Mxx, Mxr, Mrx, Mrr)``;
-* influence kernels ``f(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, out)``
-  (see :func:`influence_matrix`).
+* panel kernels ``f(x0, r0, cx, cr, ..., acc)`` filling the weights acc[k, (xx, xr, rx, rr)]
+  of one panel (:func:`panel_integral`, :func:`self_panel_integral`);
+* the influence kernel ``influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near,
+  tol, self_node, fixed, st, sw, sell, out)``.
 
 Normalisation (Pozrikidis 1992, *Boundary integral and singularity methods*, §2.4):
 :math:`M_{\alpha\beta}(x_0, r_0; x, r) = r\int_0^{2\pi} G_{\alpha\beta'}\,d\varphi` with the
@@ -31,6 +33,7 @@ __all__ = [
     "influence_matrix",
     "panel_integral",
     "ring_stokeslet",
+    "self_panel_integral",
     "ring_stokeslet_phi",
 ]
 
@@ -350,8 +353,34 @@ def panel_integral(x0, r0, cx, cr, tn, bw, gx, gw, tol, acc):
         _graded_side(x0, r0, ts, 1.0 - ts, 1, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol)
 
 
+@numba.njit(cache=True)
+def self_panel_integral(x0, r0, cx, cr, st, sw, sell, acc):
+    """Weights acc[k, (xx, xr, rx, rr)] of  int_panel M(x0, r0; X(t)) ell_k(t) dl  for a target
+    at one of the panel's own nodes, by a fixed rule: parameters st (m,), weights sw (m,) in t
+    and Lagrange values sell (m, p) of the rule for that node (:func:`bem.quadrature.self_rule`).
+    """
+    p = sell.shape[1]
+    for k in range(p):
+        for c in range(4):
+            acc[k, c] = 0.0
+    for i in range(st.shape[0]):
+        x, dx = _legendre_eval(cx, st[i])
+        r, dr = _legendre_eval(cr, st[i])
+        if r <= 0.0:
+            continue            # a ring of zero radius carries nothing
+        Mxx, Mxr, Mrx, Mrr = ring_stokeslet(x0, r0, x, r)
+        w = sw[i] * math.sqrt(dx * dx + dr * dr)
+        for k in range(p):
+            wk = w * sell[i, k]
+            acc[k, 0] += wk * Mxx
+            acc[k, 1] += wk * Mxr
+            acc[k, 2] += wk * Mrx
+            acc[k, 3] += wk * Mrr
+
+
 @numba.njit(cache=True, parallel=True)
-def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, out):
+def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, self_node,
+                     fixed, st, sw, sell, out):
     """Single-layer influence matrix of a panel set on targets, Nyström form.
 
     out[2i + a, 2(P p + k) + b] = int_panel_P M_ab(target i; X) ell_k dl, so that
@@ -361,6 +390,8 @@ def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, ou
     panel curves; tn, bw Gauss nodes and barycentric weights on [-1, 1]; gx, gw Gauss rules
     (row n holds the n-point rule); panels closer to a target than ``near`` times their length
     are integrated by :func:`panel_integral` to ``tol``, the others by the nodes' own rule.
+    A target that is node k of panel P (self_node[i] = P p + k, else -1) of a panel with
+    fixed[P] true takes the fixed rule st[k], sw[k], sell[k] (:func:`self_panel_integral`).
     """
     nt = tx.shape[0]
     npan, p = px.shape
@@ -386,7 +417,15 @@ def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, ou
                     dmin = min(dmin, dd)
                 dmin = math.sqrt(dmin)
                 base = 2 * P * p
-                if dmin < near * length:
+                if self_node[i] >= 0 and self_node[i] // p == P and fixed[P]:
+                    k0 = self_node[i] - P * p
+                    self_panel_integral(x0, r0, pcx[P], pcr[P], st[k0], sw[k0], sell[k0], acc)
+                    for k in range(p):
+                        out[2 * i, base + 2 * k] = acc[k, 0]
+                        out[2 * i, base + 2 * k + 1] = acc[k, 1]
+                        out[2 * i + 1, base + 2 * k] = acc[k, 2]
+                        out[2 * i + 1, base + 2 * k + 1] = acc[k, 3]
+                elif dmin < near * length:
                     panel_integral(x0, r0, pcx[P], pcr[P], tn, bw, gx, gw, tol, acc)
                     for k in range(p):
                         out[2 * i, base + 2 * k] = acc[k, 0]

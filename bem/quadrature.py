@@ -37,12 +37,16 @@ __all__ = [
     "integrate_panel",
     "near_factor",
     "panels_on_curve",
+    "self_rule",
 ]
 
 DEFAULT_ORDER = 16   # Gauss nodes per panel
 DEFAULT_TOL = 1e-14  # target accuracy of the singular and near-singular panel integrals
 NEAR_FACTOR = None   # None: near_factor(p, tol), the distance where the p-point rule meets tol
 NMAX = 24            # highest Gauss order of the graded sub-intervals
+SELF_BASIS = 28      # the fixed self-panel rule is exact for P_j and P_j ln on each side, j < 28
+SELF_RULE_TOL = 1e-14  # the fixed self-panel rule serves tol >= this (adaptive below)
+AXIS_CLEARANCE = 1.0   # ... on panels whose nodes stay this many panel lengths off the axis
 
 
 @cache
@@ -77,6 +81,66 @@ def gauss_table(nmax: int = NMAX) -> tuple[np.ndarray, np.ndarray]:
     gx.flags.writeable = False
     gw.flags.writeable = False
     return gx, gw
+
+
+def _graded_rule(sigma: float = 0.15, levels: int = 40, n: int = 30):
+    """Composite Gauss rule on [0, 1] on a geometric mesh graded toward 0 (smallest node
+    ~1e-33): exact to rounding for polynomials of degree < 60 times ln u."""
+    g, w = gauss_legendre(n)
+    hi = sigma ** np.arange(levels)
+    lo = hi * sigma
+    u = lo[:, None] + (hi - lo)[:, None] * 0.5 * (g + 1.0)
+    return u.ravel(), (0.5 * (hi - lo)[:, None] * w).ravel()
+
+
+@cache
+def log_rule(n_basis: int = SELF_BASIS) -> tuple[np.ndarray, np.ndarray]:
+    r"""Positive rule (u_i, w_i) on [0, 1] exact for :math:`P_j(2u-1)` and :math:`P_j(2u-1)\ln u`,
+    j < n_basis, with 2 n_basis nodes in [1e-8, 1].
+
+    Built by non-negative least squares (Carathéodory: a positive rule with at most as many
+    nodes as conditions exists) from the moments of :func:`_graded_rule`, with the conditions
+    orthonormalised in that rule's inner product; nodes below 1e-8 are excluded so that no
+    node of a self-panel rule rounds onto the target. The moments are matched to ~1.5e-15.
+    """
+    from scipy.optimize import nnls
+
+    u, w = _graded_rule()
+    V = np.polynomial.legendre.legvander(2.0 * u - 1.0, n_basis - 1)
+    phi = np.hstack([V, V * np.log(u)[:, None]]) * np.sqrt(w)[:, None]
+    q, _ = np.linalg.qr(phi)
+    keep = u > 1e-8
+    z, _ = nnls((q.T / np.sqrt(w))[:, keep], q.T @ np.sqrt(w), maxiter=50 * n_basis)
+    sel = np.nonzero(z)[0]
+    ur, wr = u[keep][sel], z[sel]
+    ur.flags.writeable = False
+    wr.flags.writeable = False
+    return ur, wr
+
+
+@cache
+def self_rule(p: int, n_basis: int = SELF_BASIS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""Fixed rules for a target at node k of a p-node panel: parameters st[k], weights sw[k]
+    in t in [-1, 1] and Lagrange values sell[k] (m, p) of the nodes' basis at st[k].
+
+    The panel is split at the target t_k and :func:`log_rule` is mapped onto each side:
+    exact for :math:`a(t) + b(t)\ln|t - t_k|` with a, b polynomials of degree < n_basis on
+    each side, the form of :math:`M_{\alpha\beta}\,\ell_j\,|X'|` on the panel (the kernel's
+    logarithm is :math:`\ln d = \ln|t - t_k| +` analytic, as long as the ring does not come near
+    the axis, where :math:`s^2 = \hat x^2 + (r + r_0)^2` vanishes).
+    """
+    t, _ = gauss_legendre(p)
+    u, w = log_rule(n_basis)
+    left, right = 1.0 + t[:, None], 1.0 - t[:, None]
+    st = np.hstack([t[:, None] - left * u, t[:, None] + right * u])
+    sw = np.hstack([left * w, right * w])
+    bw = barycentric_weights(p)
+    diff = st[:, :, None] - t[None, None, :]
+    ell = bw / diff
+    sell = ell / ell.sum(axis=2, keepdims=True)
+    for a in (st, sw, sell):
+        a.flags.writeable = False
+    return st, sw, sell
 
 
 def _legendre_coefficients(values: np.ndarray, p: int) -> np.ndarray:
@@ -194,9 +258,19 @@ def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NE
 
     t, _ = gauss_legendre(p)
     gx, gw = gauss_table()
-    out = np.empty((2 * tx.size, 2 * panels.n_nodes))
+    n = panels.n_nodes
+    self_node = np.full(tx.size, -1, dtype=np.int64)
+    if (tx.size >= n and np.array_equal(tx[:n], panels.x.ravel())
+            and np.array_equal(tr[:n], panels.r.ravel())):
+        self_node[:n] = np.arange(n)
+    fixed = panels.r.min(axis=1) >= AXIS_CLEARANCE * panels.lengths
+    if as_tol < SELF_RULE_TOL:
+        fixed[:] = False
+    st, sw, sell = self_rule(p)
+    out = np.empty((2 * tx.size, 2 * n))
     kernels.influence_matrix(tx, tr, panels.x, panels.r, panels.w, panels.cx, panels.cr,
-                             t, barycentric_weights(p), gx, gw, as_near, as_tol, out)
+                             t, barycentric_weights(p), gx, gw, as_near, as_tol, self_node,
+                             fixed, st, sw, sell, out)
     return out
 
 
