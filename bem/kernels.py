@@ -76,7 +76,13 @@ def _ke_series_m1(m1):
 
 @numba.njit(cache=True)
 def _ke_agm(m1):
-    """K and E by the arithmetic-geometric mean started from b0 = sqrt(m1) (no 1 - m)."""
+    """K and E by the arithmetic-geometric mean started from b0 = sqrt(m1) (no 1 - m).
+
+    a - b falls quadratically, a_(n+1) - b_(n+1) ~ (a_n - b_n)^2/(8 a): once a_n - b_n is below
+    1e-8 a, the step taken is the last that changes anything. (Testing the new a - b against
+    1e-16 a instead never stopped when a, b ended one rounding apart: 40 iterations, a quarter
+    of all calls for m1 in [0.05, 1], 13 on average against 4-5.)
+    """
     a = 1.0
     b = math.sqrt(m1)
     s = 0.5 * (1.0 + m1)       # 1 - c0^2/2 with c0^2 = m = 1 - m1, formed without cancellation
@@ -86,7 +92,7 @@ def _ke_agm(m1):
         w *= 2.0
         s -= w * c * c
         a, b = 0.5 * (a + b), math.sqrt(a * b)
-        if abs(a - b) <= 1e-16 * a:
+        if c <= 0.5e-8 * a:
             break
     K = 0.5 * _PI / a
     return K, K * s
@@ -125,8 +131,9 @@ def ring_stokeslet_phi(x0, r0, x, r, n):
     """Ring Stokeslet by the trapezoidal rule in the azimuth with ``n`` intervals on [0, pi].
 
     The integrand is even, periodic and analytic; the error falls like
-    exp(-2 n arccosh(2/m - 1)), so n = 8 gives machine precision for m <= 0.1. Accurate in
-    absolute terms near the axis, where the elliptic form cancels.
+    exp(-2 n arccosh(2/m - 1)), so n = 6 reaches the rounding floor for m < 0.1 (measured; see
+    :func:`ring_stokeslet`). Accurate in absolute terms near the axis, where the elliptic form
+    cancels.
     """
     xh = x0 - x
     xh2 = xh * xh
@@ -158,8 +165,8 @@ def ring_stokeslet(x0, r0, x, r):
 
     Pozrikidis (1992) normalisation (see the module docstring). Three branches: the field point
     on the axis (r0 == 0: closed form, Mrx = Mrr = 0); small parameter m = 4 r r0 / s^2 < 0.1
-    (azimuthal trapezoidal rule, which avoids the 1/r0 cancellation of the elliptic form near
-    the axis); otherwise the elliptic form with K, E computed from m1 = d^2/s^2 directly.
+    (azimuthal trapezoidal rule with 4-7 intervals by m, which avoids the 1/r0 cancellation of
+    the elliptic form near the axis); otherwise the elliptic form with K, E computed from m1 = d^2/s^2 directly.
     The coincident point (d = 0) is singular and returns inf.
     """
     xh = x0 - x
@@ -173,7 +180,18 @@ def ring_stokeslet(x0, r0, x, r):
     s2 = xh2 + (r + r0) * (r + r0)
     m = 4.0 * r * r0 / s2
     if m < 0.1:
-        return ring_stokeslet_phi(x0, r0, x, r, 8)
+        # intervals of the azimuthal rule: the largest n whose error exceeds 1e-15 (relative
+        # to the largest component; measured against n = 64 on 2e4 random points), plus one:
+        # n = 3, 4, 5, 6 reach the rounding floor below m = 0.003, 0.02, 0.05, 0.1
+        if m < 0.003:
+            n = 4
+        elif m < 0.02:
+            n = 5
+        elif m < 0.05:
+            n = 6
+        else:
+            n = 7
+        return ring_stokeslet_phi(x0, r0, x, r, n)
     m1 = d2 / s2
     if m1 <= 0.0:
         return math.inf, 0.0, 0.0, math.inf
