@@ -213,27 +213,34 @@ def ring_stokeslet(x0, r0, x, r):
 # Legendre coefficients; densities are interpolated by the Lagrange basis on the Gauss nodes)
 # --------------------------------------------------------------------------------------------
 @numba.njit(cache=True)
-def _legendre_eval(c, t):
-    """Value and derivative of sum_n c[n] P_n(t)."""
-    p = c.shape[0]
+def _curve_eval(cx, cr, t):
+    """(x, dx/dt, r, dr/dt) of the panel curve sum_n (cx[n], cr[n]) P_n(t) at t, by the
+    three-term recurrence (P'_{n+1} = P'_{n-1} + (2n+1) P_n), shared by both coordinates."""
+    p = cx.shape[0]
+    x = cx[0]
+    r = cr[0]
+    dx = 0.0
+    dr = 0.0
+    if p == 1:
+        return x, dx, r, dr
     P0 = 1.0
     D0 = 0.0
-    f = c[0]
-    df = 0.0
-    if p == 1:
-        return f, df
     P1 = t
     D1 = 1.0
-    f += c[1] * P1
-    df += c[1] * D1
+    x += cx[1] * P1
+    dx += cx[1] * D1
+    r += cr[1] * P1
+    dr += cr[1] * D1
     for n in range(1, p - 1):
         P2 = ((2.0 * n + 1.0) * t * P1 - n * P0) / (n + 1.0)
-        D2 = D0 + (2.0 * n + 1.0) * P1        # P'_{n+1} = P'_{n-1} + (2n+1) P_n
-        f += c[n + 1] * P2
-        df += c[n + 1] * D2
+        D2 = D0 + (2.0 * n + 1.0) * P1
+        x += cx[n + 1] * P2
+        dx += cx[n + 1] * D2
+        r += cr[n + 1] * P2
+        dr += cr[n + 1] * D2
         P0, P1 = P1, P2
         D0, D1 = D1, D2
-    return f, df
+    return x, dx, r, dr
 
 
 @numba.njit(cache=True)
@@ -250,8 +257,9 @@ def _lagrange(t, tn, bw, ell):
     for k in range(p):
         ell[k] = bw[k] / (t - tn[k])
         s += ell[k]
+    inv = 1.0 / s
     for k in range(p):
-        ell[k] /= s
+        ell[k] *= inv
 
 
 @numba.njit(cache=True)
@@ -259,8 +267,7 @@ def _nearest_parameter(x0, r0, cx, cr, t_start):
     """Parameter in [-1, 1] of the point of the panel nearest to (x0, r0), by Gauss-Newton."""
     t = t_start
     for _ in range(30):
-        x, dx = _legendre_eval(cx, t)
-        r, dr = _legendre_eval(cr, t)
+        x, dx, r, dr = _curve_eval(cx, cr, t)
         g = (x - x0) * dx + (r - r0) * dr
         h = dx * dx + dr * dr
         step = g / h
@@ -280,8 +287,7 @@ def _accumulate_interval(x0, r0, a, b, n, gx, gw, cx, cr, tn, bw, ell, acc):
     p = tn.shape[0]
     for i in range(n):
         t = mid + half * gx[n, i]
-        x, dx = _legendre_eval(cx, t)
-        r, dr = _legendre_eval(cr, t)
+        x, dx, r, dr = _curve_eval(cx, cr, t)
         r = max(r, 0.0)
         if r == 0.0 or (x == x0 and r == r0):
             continue            # a ring of zero radius carries nothing; d = 0 has measure zero
@@ -336,6 +342,25 @@ def _graded_side(x0, r0, ts, length, sgn, delta_t, gx, gw, cx, cr, tn, bw, ell, 
 
 
 @numba.njit(cache=True)
+def _graded_panel(x0, r0, cx, cr, t_start, tn, bw, gx, gw, tol, acc):
+    """:func:`panel_integral` with the Gauss-Newton search for t* started from ``t_start``."""
+    p = tn.shape[0]
+    ell = np.empty(p)
+    for k in range(p):
+        for c in range(4):
+            acc[k, c] = 0.0
+    ts = _nearest_parameter(x0, r0, cx, cr, t_start)
+    x, dx, r, dr = _curve_eval(cx, cr, ts)
+    dist = math.sqrt((x - x0) ** 2 + (r - r0) ** 2)
+    speed = math.sqrt(dx * dx + dr * dr)
+    delta_t = dist / speed
+    if ts > -1.0:
+        _graded_side(x0, r0, ts, ts + 1.0, -1, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol)
+    if ts < 1.0:
+        _graded_side(x0, r0, ts, 1.0 - ts, 1, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol)
+
+
+@numba.njit(cache=True)
 def panel_integral(x0, r0, cx, cr, tn, bw, gx, gw, tol, acc):
     """Weights acc[k, (xx, xr, rx, rr)] of  int_panel M(x0, r0; X(t)) ell_k(t) dl  (singular-safe).
 
@@ -345,30 +370,16 @@ def panel_integral(x0, r0, cx, cr, tn, bw, gx, gw, tol, acc):
     singularity of Mxx, Mrr (target on the panel) and for near-singular targets.
     """
     p = tn.shape[0]
-    ell = np.empty(p)
-    for k in range(p):
-        for c in range(4):
-            acc[k, c] = 0.0
     # start Gauss-Newton from the nearest node
     best = 0
     bestd = math.inf
     for k in range(p):
-        x, _ = _legendre_eval(cx, tn[k])
-        r, _ = _legendre_eval(cr, tn[k])
+        x, _, r, _ = _curve_eval(cx, cr, tn[k])
         dd = (x - x0) ** 2 + (r - r0) ** 2
         if dd < bestd:
             bestd = dd
             best = k
-    ts = _nearest_parameter(x0, r0, cx, cr, tn[best])
-    x, dx = _legendre_eval(cx, ts)
-    r, dr = _legendre_eval(cr, ts)
-    dist = math.sqrt((x - x0) ** 2 + (r - r0) ** 2)
-    speed = math.sqrt(dx * dx + dr * dr)
-    delta_t = dist / speed
-    if ts > -1.0:
-        _graded_side(x0, r0, ts, ts + 1.0, -1, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol)
-    if ts < 1.0:
-        _graded_side(x0, r0, ts, 1.0 - ts, 1, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol)
+    _graded_panel(x0, r0, cx, cr, tn[best], tn, bw, gx, gw, tol, acc)
 
 
 @numba.njit(cache=True)
@@ -382,8 +393,7 @@ def self_panel_integral(x0, r0, cx, cr, st, sw, sell, acc):
         for c in range(4):
             acc[k, c] = 0.0
     for i in range(st.shape[0]):
-        x, dx = _legendre_eval(cx, st[i])
-        r, dr = _legendre_eval(cr, st[i])
+        x, dx, r, dr = _curve_eval(cx, cr, st[i])
         if r <= 0.0:
             continue            # a ring of zero radius carries nothing
         Mxx, Mxr, Mrx, Mrr = ring_stokeslet(x0, r0, x, r)
@@ -430,9 +440,12 @@ def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, se
                 for k in range(p):
                     length += pw[P, k]
                 dmin = math.inf
+                best = 0
                 for k in range(p):
                     dd = (px[P, k] - x0) ** 2 + (pr[P, k] - r0) ** 2
-                    dmin = min(dmin, dd)
+                    if dd < dmin:
+                        dmin = dd
+                        best = k
                 dmin = math.sqrt(dmin)
                 base = 2 * P * p
                 if self_node[i] >= 0 and self_node[i] // p == P and fixed[P]:
@@ -443,8 +456,8 @@ def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, se
                         out[2 * i, base + 2 * k + 1] = acc[k, 1]
                         out[2 * i + 1, base + 2 * k] = acc[k, 2]
                         out[2 * i + 1, base + 2 * k + 1] = acc[k, 3]
-                elif dmin < near * length:
-                    panel_integral(x0, r0, pcx[P], pcr[P], tn, bw, gx, gw, tol, acc)
+                elif dmin < near * length:      # start from the nearest node
+                    _graded_panel(x0, r0, pcx[P], pcr[P], tn[best], tn, bw, gx, gw, tol, acc)
                     for k in range(p):
                         out[2 * i, base + 2 * k] = acc[k, 0]
                         out[2 * i, base + 2 * k + 1] = acc[k, 1]
