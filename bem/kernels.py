@@ -9,8 +9,9 @@ checks the inputs). Kernels of one family share one signature:
 * pointwise ring Stokeslet ``ring_stokeslet(x0, r0, x, r) -> (Mxx, Mxr, Mrx, Mrr)``;
 * panel kernels ``f(x0, r0, cx, cr, ..., acc)`` filling the weights acc[k, (xx, xr, rx, rr)]
   of one panel (:func:`panel_integral`, :func:`self_panel_integral`);
-* the influence kernel ``influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near,
-  tol, self_node, fixed, st, sw, sell, out)``.
+* the influence kernels ``influence_matrix`` (parallel over targets) and
+  ``influence_matrix_serial``, both ``f(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol,
+  self_node, fixed, st, sw, sell, out)``.
 
 Normalisation (Pozrikidis 1992, *Boundary integral and singularity methods*, §2.4):
 :math:`M_{\alpha\beta}(x_0, r_0; x, r) = r\int_0^{2\pi} G_{\alpha\beta'}\,d\varphi` with the
@@ -31,6 +32,7 @@ __all__ = [
     "ellipk_m1",
     "ellipke_m1",
     "influence_matrix",
+    "influence_matrix_serial",
     "panel_integral",
     "ring_stokeslet",
     "self_panel_integral",
@@ -415,6 +417,55 @@ def self_panel_integral(x0, r0, cx, cr, st, sw, sell, acc):
             acc[k, 3] += wk * Mrr
 
 
+@numba.njit(cache=True)
+def _store(out, i, base, acc):
+    """Write the panel weights acc[k, (xx, xr, rx, rr)] into rows 2i, 2i+1 from column base."""
+    for k in range(acc.shape[0]):
+        out[2 * i, base + 2 * k] = acc[k, 0]
+        out[2 * i, base + 2 * k + 1] = acc[k, 1]
+        out[2 * i + 1, base + 2 * k] = acc[k, 2]
+        out[2 * i + 1, base + 2 * k + 1] = acc[k, 3]
+
+
+@numba.njit(cache=True)
+def _influence_rows(c, n_chunks, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol,
+                    self_node, fixed, st, sw, sell, out):
+    """Rows of the targets i = c, c + n_chunks, ... of :func:`influence_matrix`."""
+    nt = tx.shape[0]
+    npan, p = px.shape
+    acc = np.empty((p, 4))
+    for i in range(c, nt, n_chunks):
+        x0 = tx[i]
+        r0 = tr[i]
+        for P in range(npan):
+            length = 0.0
+            dmin = math.inf
+            best = 0
+            for k in range(p):
+                length += pw[P, k]
+                dd = (px[P, k] - x0) ** 2 + (pr[P, k] - r0) ** 2
+                if dd < dmin:
+                    dmin = dd
+                    best = k
+            dmin = math.sqrt(dmin)
+            base = 2 * P * p
+            if self_node[i] >= 0 and self_node[i] // p == P and fixed[P]:
+                k0 = self_node[i] - P * p
+                self_panel_integral(x0, r0, pcx[P], pcr[P], st[k0], sw[k0], sell[k0], acc)
+                _store(out, i, base, acc)
+            elif dmin < near * length:          # start from the nearest node
+                _graded_panel(x0, r0, pcx[P], pcr[P], tn[best], tn, bw, gx, gw, tol, acc)
+                _store(out, i, base, acc)
+            else:
+                for k in range(p):
+                    Mxx, Mxr, Mrx, Mrr = ring_stokeslet(x0, r0, px[P, k], pr[P, k])
+                    w = pw[P, k]
+                    out[2 * i, base + 2 * k] = w * Mxx
+                    out[2 * i, base + 2 * k + 1] = w * Mxr
+                    out[2 * i + 1, base + 2 * k] = w * Mrx
+                    out[2 * i + 1, base + 2 * k + 1] = w * Mrr
+
+
 @numba.njit(cache=True, parallel=True)
 def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, self_node,
                      fixed, st, sw, sell, out):
@@ -430,53 +481,24 @@ def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, se
     A target that is node k of panel P (self_node[i] = P p + k, else -1) of a panel with
     fixed[P] true takes the fixed rule st[k], sw[k], sell[k] (:func:`self_panel_integral`).
     """
-    nt = tx.shape[0]
-    npan, p = px.shape
     # targets are dealt out cyclically to 64 chunks, the chunks to the threads: targets come
     # in runs of very different cost (an object's own nodes, each with its self and near
     # panels, then the wall's) and prange hands each thread one contiguous block, so that
     # with 2 threads the vesicle's membrane-source matrix (176 membrane + 160 wall targets)
     # took 29 ms against 34 ms on one thread; dealt out, 17-18 ms (any thread count to 64;
     # numba.get_num_threads() here would stop numba from caching the function)
-    n_chunks = min(nt, 64)
+    n_chunks = min(tx.shape[0], 64)
     for c in numba.prange(n_chunks):
-        acc = np.empty((p, 4))
-        for i in range(c, nt, n_chunks):
-            x0 = tx[i]
-            r0 = tr[i]
-            for P in range(npan):
-                length = 0.0
-                for k in range(p):
-                    length += pw[P, k]
-                dmin = math.inf
-                best = 0
-                for k in range(p):
-                    dd = (px[P, k] - x0) ** 2 + (pr[P, k] - r0) ** 2
-                    if dd < dmin:
-                        dmin = dd
-                        best = k
-                dmin = math.sqrt(dmin)
-                base = 2 * P * p
-                if self_node[i] >= 0 and self_node[i] // p == P and fixed[P]:
-                    k0 = self_node[i] - P * p
-                    self_panel_integral(x0, r0, pcx[P], pcr[P], st[k0], sw[k0], sell[k0], acc)
-                    for k in range(p):
-                        out[2 * i, base + 2 * k] = acc[k, 0]
-                        out[2 * i, base + 2 * k + 1] = acc[k, 1]
-                        out[2 * i + 1, base + 2 * k] = acc[k, 2]
-                        out[2 * i + 1, base + 2 * k + 1] = acc[k, 3]
-                elif dmin < near * length:      # start from the nearest node
-                    _graded_panel(x0, r0, pcx[P], pcr[P], tn[best], tn, bw, gx, gw, tol, acc)
-                    for k in range(p):
-                        out[2 * i, base + 2 * k] = acc[k, 0]
-                        out[2 * i, base + 2 * k + 1] = acc[k, 1]
-                        out[2 * i + 1, base + 2 * k] = acc[k, 2]
-                        out[2 * i + 1, base + 2 * k + 1] = acc[k, 3]
-                else:
-                    for k in range(p):
-                        Mxx, Mxr, Mrx, Mrr = ring_stokeslet(x0, r0, px[P, k], pr[P, k])
-                        w = pw[P, k]
-                        out[2 * i, base + 2 * k] = w * Mxx
-                        out[2 * i, base + 2 * k + 1] = w * Mxr
-                        out[2 * i + 1, base + 2 * k] = w * Mrx
-                        out[2 * i + 1, base + 2 * k + 1] = w * Mrr
+        _influence_rows(c, n_chunks, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol,
+                        self_node, fixed, st, sw, sell, out)
+
+
+@numba.njit(cache=True)
+def influence_matrix_serial(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol,
+                            self_node, fixed, st, sw, sell, out):
+    """:func:`influence_matrix` on the calling thread (for small blocks, where starting the
+    parallel region costs more than the work: see :data:`bem.quadrature.SERIAL_WORK`)."""
+    n_chunks = min(tx.shape[0], 64)
+    for c in range(n_chunks):
+        _influence_rows(c, n_chunks, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol,
+                        self_node, fixed, st, sw, sell, out)

@@ -47,6 +47,10 @@ NMAX = 24            # highest Gauss order of the graded sub-intervals
 SELF_BASIS = 28      # the fixed self-panel rule is exact for P_j and P_j ln on each side, j < 28
 SELF_RULE_TOL = 1e-14  # the fixed self-panel rule serves tol >= this (adaptive below)
 AXIS_CLEARANCE = 1.0   # ... on panels whose nodes stay this many panel lengths off the axis
+#: blocks with fewer (targets x source nodes) are assembled on the calling thread: starting
+#: numba's parallel region costs more than such a block (measured on the 2 shared cores at load
+#: 5: the vesicle's inlet block, 176 x 48, 0.74 ms on one thread, 4-8 ms on two)
+SERIAL_WORK = 40_000
 
 
 @cache
@@ -268,9 +272,10 @@ def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NE
         fixed[:] = False
     st, sw, sell = self_rule(p)
     out = np.empty((2 * tx.size, 2 * n))
-    kernels.influence_matrix(tx, tr, panels.x, panels.r, panels.w, panels.cx, panels.cr,
-                             t, barycentric_weights(p), gx, gw, as_near, as_tol, self_node,
-                             fixed, st, sw, sell, out)
+    kernel = (kernels.influence_matrix_serial if tx.size * n < SERIAL_WORK
+              else kernels.influence_matrix)
+    kernel(tx, tr, panels.x, panels.r, panels.w, panels.cx, panels.cr, t, barycentric_weights(p),
+           gx, gw, as_near, as_tol, self_node, fixed, st, sw, sell, out)
     return out
 
 
