@@ -11,7 +11,8 @@ checks the inputs). Kernels of one family share one signature:
   of one panel (:func:`panel_integral`, :func:`self_panel_integral`);
 * the influence kernels ``influence_matrix`` (parallel over targets) and
   ``influence_matrix_serial``, both ``f(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol,
-  self_node, fixed, st, sw, sell, out)``.
+  self_node, fixed, st, sw, sell, out)``, and :func:`cross_influence_matrix` of two panel sets
+  on each other's nodes.
 
 Normalisation (Pozrikidis 1992, *Boundary integral and singularity methods*, §2.4):
 :math:`M_{\alpha\beta}(x_0, r_0; x, r) = r\int_0^{2\pi} G_{\alpha\beta'}\,d\varphi` with the
@@ -28,6 +29,7 @@ import numba
 import numpy as np
 
 __all__ = [
+    "cross_influence_matrix",
     "ellipe_m1",
     "ellipk_m1",
     "ellipke_m1",
@@ -243,7 +245,10 @@ def _curve_eval(cx, cr, t):
     r += cr[1] * P1
     dr += cr[1] * D1
     for n in range(1, p - 1):
-        P2 = ((2.0 * n + 1.0) * t * P1 - n * P0) / (n + 1.0)
+        # the coefficients depend on n only: no division in the chain P0 -> P1 -> P2
+        a = (2.0 * n + 1.0) / (n + 1.0)
+        b = n / (n + 1.0)
+        P2 = a * t * P1 - b * P0
         D2 = D0 + (2.0 * n + 1.0) * P1
         x += cx[n + 1] * P2
         dx += cx[n + 1] * D2
@@ -502,3 +507,87 @@ def influence_matrix_serial(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, 
     for c in range(n_chunks):
         _influence_rows(c, n_chunks, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol,
                         self_node, fixed, st, sw, sell, out)
+
+
+@numba.njit(cache=True)
+def _near_rows(c, n_chunks, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, out,
+               is_near):
+    """Near panels of the targets i = c, c + n_chunks, ...: is_near[i, P] and, where true, the
+    graded panel integral in out (the far entries are left to the caller)."""
+    nt = tx.shape[0]
+    npan, p = px.shape
+    acc = np.empty((p, 4))
+    for i in range(c, nt, n_chunks):
+        for P in range(npan):
+            length = 0.0
+            dmin = math.inf
+            best = 0
+            for k in range(p):
+                length += pw[P, k]
+                dd = (px[P, k] - tx[i]) ** 2 + (pr[P, k] - tr[i]) ** 2
+                if dd < dmin:
+                    dmin = dd
+                    best = k
+            is_near[i, P] = math.sqrt(dmin) < near * length
+            if is_near[i, P]:
+                _graded_panel(tx[i], tr[i], pcx[P], pcr[P], tn[best], tn, bw, gx, gw, tol, acc)
+                _store(out, i, 2 * P * p, acc)
+
+
+@numba.njit(cache=True, parallel=True)
+def cross_influence_matrix(ax, ar, aw, acx, acr, bx, br, bw_, bcx, bcr, tn, bw, gx, gw, near,
+                           tol, out_ab, out_ba):
+    """Influence matrices of two disjoint panel sets a and b on each other's nodes.
+
+    out_ab: panels b on the nodes of a; out_ba: panels a on the nodes of b (each as
+    :func:`influence_matrix` with the nodes as targets). Near panels are integrated by the
+    graded rule; every other pair of nodes (a_i, b_j) costs one ring Stokeslet M(a_i; b_j),
+    which gives the entry of out_ab and, by the reciprocity of the ring Stokeslet
+    M_ab(x0; x)/r = M_ba(x; x0)/r0, the entry M_ba(b_j; a_i) = (r_i/r_j) M_ab(a_i; b_j) of out_ba.
+    Inputs per set: node coordinates, weights (Gauss weight times |dX/dt|), Legendre
+    coefficients, all (n_panels, p); the rest as :func:`influence_matrix`.
+    """
+    na_pan, p = ax.shape
+    nb_pan = bx.shape[0]
+    na, nb = na_pan * p, nb_pan * p
+    axf, arf = ax.ravel(), ar.ravel()
+    bxf, brf = bx.ravel(), br.ravel()
+    near_ab = np.zeros((na, nb_pan), dtype=np.bool_)
+    near_ba = np.zeros((nb, na_pan), dtype=np.bool_)
+    ca, cb = min(na, 64), min(nb, 64)
+    for c in numba.prange(ca + cb):
+        if c < ca:
+            _near_rows(c, ca, axf, arf, bx, br, bw_, bcx, bcr, tn, bw, gx, gw, near, tol,
+                       out_ab, near_ab)
+        else:
+            _near_rows(c - ca, cb, bxf, brf, ax, ar, aw, acx, acr, tn, bw, gx, gw, near, tol,
+                       out_ba, near_ba)
+    # far pairs: contiguous runs of a-nodes per chunk, so that the transposed writes into
+    # out_ba (columns 2i, 2i + 1) of neighbouring i share cache lines (dealt out cyclically,
+    # every write missed: 170 ms against ~120 ms for the 2176 x 352 pairs of a long vesicle)
+    for c in numba.prange(ca):
+        for i in range(c * na // ca, (c + 1) * na // ca):
+            P = i // p
+            x0 = axf[i]
+            r0 = arf[i]
+            wa = aw[P, i - P * p]
+            for Q in range(nb_pan):
+                ab_far = not near_ab[i, Q]
+                for kb in range(p):
+                    j = Q * p + kb
+                    ba_far = not near_ba[j, P]
+                    if not (ab_far or ba_far):
+                        continue
+                    Mxx, Mxr, Mrx, Mrr = ring_stokeslet(x0, r0, bx[Q, kb], br[Q, kb])
+                    if ab_far:
+                        w = bw_[Q, kb]
+                        out_ab[2 * i, 2 * j] = w * Mxx
+                        out_ab[2 * i, 2 * j + 1] = w * Mxr
+                        out_ab[2 * i + 1, 2 * j] = w * Mrx
+                        out_ab[2 * i + 1, 2 * j + 1] = w * Mrr
+                    if ba_far:
+                        f = wa * r0 / br[Q, kb]
+                        out_ba[2 * j, 2 * i] = f * Mxx
+                        out_ba[2 * j, 2 * i + 1] = f * Mrx
+                        out_ba[2 * j + 1, 2 * i] = f * Mxr
+                        out_ba[2 * j + 1, 2 * i + 1] = f * Mrr

@@ -34,6 +34,7 @@ __all__ = [
     "gauss_legendre",
     "gauss_table",
     "influence",
+    "influence_pair",
     "integrate_panel",
     "near_factor",
     "panels_on_curve",
@@ -277,6 +278,33 @@ def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NE
     kernel(tx, tr, panels.x, panels.r, panels.w, panels.cx, panels.cr, t, barycentric_weights(p),
            gx, gw, as_near, as_tol, self_node, fixed, st, sw, sell, out)
     return out
+
+
+def influence_pair(a: PanelSet, b: PanelSet, *, near: float | None = NEAR_FACTOR,
+                   tol: float = DEFAULT_TOL) -> tuple[np.ndarray, np.ndarray]:
+    r"""``(influence(a nodes, b), influence(b nodes, a))`` of two disjoint panel sets (say a
+    membrane and the tube wall) with one ring Stokeslet per far pair of nodes.
+
+    The ring Stokeslet is reciprocal, :math:`M_{\alpha\beta}(x_0; x)/r = M_{\beta\alpha}(x; x_0)/r_0`
+    (Pozrikidis 1992), so the far entries of one matrix give those of the other; near panels
+    are integrated by the graded rule as in :func:`influence`. Equal to the two calls of
+    :func:`influence` to rounding (tests/bem/test_quadrature_self_rule.py).
+    """
+    if a.order != b.order:
+        raise InvalidParameterError("b.order", b.order, f"equal to a.order = {a.order}")
+    as_tol = float(check_range("tol", tol, 1e-16, 1e-2))
+    p = a.order
+    as_near = near_factor(p, as_tol) if near is None else float(check_positive("near", near))
+    from . import kernels
+
+    t, _ = gauss_legendre(p)
+    gx, gw = gauss_table()
+    out_ab = np.empty((2 * a.n_nodes, 2 * b.n_nodes))
+    out_ba = np.empty((2 * b.n_nodes, 2 * a.n_nodes))
+    kernels.cross_influence_matrix(a.x, a.r, a.w, a.cx, a.cr, b.x, b.r, b.w, b.cx, b.cr, t,
+                                   barycentric_weights(p), gx, gw, as_near, as_tol, out_ab,
+                                   out_ba)
+    return out_ab, out_ba
 
 
 def integrate_panel(x0: float, r0: float, panels: PanelSet, index: int, density,
