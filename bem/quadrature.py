@@ -1,13 +1,25 @@
 r"""High-order panels on axisymmetric generating curves and their quadrature rules.
 
 A generating curve is cut into panels; each panel carries ``p`` Gauss–Legendre nodes in its
-parameter. Far from a target the nodes' own rule is used (Nyström); a target on the panel (the
-logarithmic self-panel singularity of :math:`M_{xx}, M_{rr}`, the :math:`\hat x\ln d` terms of
-:math:`M_{xr}, M_{rx}`) or close to it (distance below ``near`` panel lengths) is handled by
-splitting the panel at the nearest point and integrating each side on a geometric mesh graded
-toward it, with the density interpolated from the nodes (:func:`bem.kernels.panel_integral`).
-The convergence of the panel rule is algebraic of order ~p in the panel size for near and self
-interactions, and spectral in p.
+parameter. Far from a target the nodes' own rule is used (Nyström). A target close to a panel
+(distance below ``near`` panel lengths) is handled by splitting the panel at the nearest point
+and integrating each side on a geometric mesh graded toward it, with the density interpolated
+from the nodes (:func:`bem.kernels.panel_integral`). A target that is one of the panel's own
+nodes (the logarithmic self-panel singularity of :math:`M_{xx}, M_{rr}`, the
+:math:`\hat x\ln d` terms of :math:`M_{xr}, M_{rx}`) takes a fixed rule per node instead
+(:func:`self_rule`: 2 x 40 kernel calls, exact for polynomial + polynomial x log on each side of
+the node), unless the panel comes within one panel length of the axis, where the mirror
+singularity of :math:`s^2 = \hat x^2 + (r + r_0)^2` is near, or ``tol`` < 1e-14; there the
+graded mesh (~500 kernel calls at tol 1e-14) is kept. The convergence of the panel rule is
+algebraic of order ~p in the panel size for near and self interactions, and spectral in p.
+
+Measured on one BEM evaluation of the steady vesicle (lubrication seeds at (ν, λ) = (0.9, 1.0),
+32 modes; (0.61, 1.39), 40 modes; (0.6, 1.94), 64 modes; Ca_B = 50;
+tests/benchmarks/bench_evaluation.py): the fixed self rule changes V/U, Δp⁺ and γ_max by
+≤ 3e-13 relative, the self blocks are within 5e-12 of the graded rule at tol 1e-16 (relative
+to each row's largest entry; the graded rule at its default 1e-14 is 4e-12 off on the pole
+panels), and the self integrals take 14 000 instead of 87 500 of the 204 000 kernel calls of the
+assembly at (0.9, 1.0) (on one thread the membrane-source block fell from 43 to 24 ms).
 
 The heavy lifting is in :mod:`bem.kernels`; this module builds the rule tables and the
 :class:`PanelSet` arrays in numpy and checks the user's inputs.
@@ -42,12 +54,22 @@ __all__ = [
 ]
 
 DEFAULT_ORDER = 16   # Gauss nodes per panel
-DEFAULT_TOL = 1e-14  # target accuracy of the singular and near-singular panel integrals
+#: target accuracy of the graded (near-singular, and self near the axis) panel integrals. Kept
+#: at 1e-14: with the self panels on the fixed rule it governs the near panels only, and 1e-12,
+#: 1e-11, 1e-10 change V/U, Δp⁺, γ_max of the three vesicle seeds (module docstring) by up to
+#: 3.1e-11, 2.8e-10, 3.1e-9 (the 64-mode seed at (0.6, 1.94) the worst) while saving only 4-6 %
+#: of the near-panel kernel calls (the grading depth is set by the distance, not by tol)
+DEFAULT_TOL = 1e-14
 NEAR_FACTOR = None   # None: near_factor(p, tol), the distance where the p-point rule meets tol
 NMAX = 24            # highest Gauss order of the graded sub-intervals
-SELF_BASIS = 28      # the fixed self-panel rule is exact for P_j and P_j ln on each side, j < 28
-SELF_RULE_TOL = 1e-14  # the fixed self-panel rule serves tol >= this (adaptive below)
-AXIS_CLEARANCE = 1.0   # ... on panels whose nodes stay this many panel lengths off the axis
+#: the fixed self-panel rule is exact for P_j(u) and P_j(u) ln u on each side, j < 28: with
+#: j < 20 the self blocks of the vesicle seeds were 1e-11 to 3e-11 off; from 24 on the
+#: difference to the graded rule at tol 1e-16 stays at its floor, 5e-13 to 5e-12
+SELF_BASIS = 28
+SELF_RULE_TOL = 1e-14  # the fixed self-panel rule serves tol >= this (graded below)
+#: ... on panels whose nodes stay this many panel lengths off the axis: with the fixed rule on
+#: the pole panels too (r_min ~ 0.01 length) their self blocks were 1e-6 off
+AXIS_CLEARANCE = 1.0
 #: blocks with fewer (targets x source nodes) are assembled on the calling thread: starting
 #: numba's parallel region costs more than such a block (measured on the 2 shared cores at load
 #: 5: the vesicle's inlet block, 176 x 48, 0.74 ms on one thread, 4-8 ms on two)
@@ -241,7 +263,9 @@ def near_factor(p: int, tol: float = DEFAULT_TOL) -> float:
 
     The p-point rule converges like rho^(-2p), rho the Bernstein ellipse through the target's
     pre-image; a target at distance d from a panel of length h has rho >~ 4 d/h, so the rule
-    is trusted for d/h > rho*/4 with rho* = tol^(-1/(2p)), and never closer than one length.
+    is trusted for d/h > rho*/4 with rho* = tol^(-1/(2p)), and never closer than one length
+    (the estimate alone gives 0.68 lengths for p = 16 at 1e-14; at 0.8 lengths V/U and Δp⁺ of
+    the vesicle at (0.6, 1.94), 64 modes, moved by 6e-7).
     """
     return max(1.0, float(tol) ** (-1.0 / (2.0 * int(p))) / 4.0)
 
