@@ -64,7 +64,7 @@ def _ke_series_m1(m1):
     p = m1           # m1^n
     for n in range(1, 40):
         g_prev = g
-        g = g * (n - 0.5) / n
+        g *= (n - 0.5) / n         # the ratio depends on n only: no division in the chain
         t = 1.0 / ((2.0 * n - 1.0) * (2.0 * n))
         d = b + t
         b = b + 2.0 * t
@@ -159,7 +159,7 @@ def ring_stokeslet_phi(x0, r0, x, r, n):
             c = -1.0
         rho2 = c0 - 2.0 * r * r0 * c
         i1 = 1.0 / math.sqrt(rho2)
-        i3 = i1 / rho2
+        i3 = i1 * i1 * i1
         wgt = 0.5 if (i == 0 or i == n) else 1.0
         sxx += wgt * (i1 + xh2 * i3)
         sxr += wgt * (r0 * c - r) * i3
@@ -209,15 +209,17 @@ def ring_stokeslet(x0, r0, x, r):
     K, E = ellipke_m1(m1)
     rr = math.sqrt(r * r0)
     k = 2.0 * rr / math.sqrt(s2)   # sqrt(m); sqrt(r/r0) = rr/r0 below (two square roots)
-    q = rr / r0
+    i_r0 = 1.0 / r0
+    i_rr = 1.0 / rr
+    q = rr * i_r0
     sq = r * r + r0 * r0
     dq = (r - r0) * (r + r0)       # r^2 - r0^2 in factored form: no cancellation near d = 0
     ed = E / d2
     Mxx = 2.0 * k * q * (K + xh2 * ed)
-    Mxr = -(k * xh / rr) * (K - (xh2 - dq) * ed)
-    Mrx = (k * xh / r0) * q * (K - (xh2 + dq) * ed)
-    Mrr = (k / (r0 * rr)) * ((2.0 * xh2 + sq) * K
-                             - (2.0 * xh2 * xh2 + 3.0 * xh2 * sq + dq * dq) * ed)
+    Mxr = -(k * xh * i_rr) * (K - (xh2 - dq) * ed)
+    Mrx = (k * xh * i_r0) * q * (K - (xh2 + dq) * ed)
+    Mrr = (k * i_r0 * i_rr) * ((2.0 * xh2 + sq) * K
+                               - (2.0 * xh2 * xh2 + 3.0 * xh2 * sq + dq * dq) * ed)
     return Mxx, Mxr, Mrx, Mrr
 
 
