@@ -1,7 +1,8 @@
 """Cost of ONE BEM evaluation of the steady vesicle operator, this tree against a baseline
 revision (prints a table; not a test: timings depend on the machine and its load).
 
-Run with ``python tests/benchmarks/bench_evaluation.py [--baseline REV] [--rounds 2]``.
+Run with ``python tests/benchmarks/bench_evaluation.py [--baseline REV] [--rounds 2]
+[--threads 1]``.
 
 Shapes (fixed, so that only the operator is compared): the lubrication seed
 (:func:`bem.vesicle.lubrication_seed`, Ca_B = 50) at (ν, λ) = (0.9, 1.0) with 32 modes (uniform
@@ -76,8 +77,10 @@ def export(rev: str, into: str) -> str:
     return into
 
 
-def run_side(path: str, seeds_file: str) -> list:
+def run_side(path: str, seeds_file: str, threads: int | None) -> list:
     env = dict(os.environ, PYTHONPATH=path)
+    if threads:
+        env["NUMBA_NUM_THREADS"] = str(threads)
     out = subprocess.run([sys.executable, "-c", _CHILD, seeds_file], cwd=path, env=env,
                          check=True, capture_output=True, text=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -91,6 +94,9 @@ def main(argv=None) -> None:
                     help="evaluations timed per shape and round; the minimum is kept (default 5)")
     ap.add_argument("--rounds", type=int, default=2,
                     help="alternating baseline/current rounds (default 2)")
+    ap.add_argument("--threads", type=int, default=None,
+                    help="numba threads of both sides (default: numba's, one per core); on a "
+                         "loaded machine one thread gives the steadier comparison")
     ap.add_argument("--json", help="also write the rows to this JSON file")
     args = ap.parse_args(argv)
     seeds = make_seeds()
@@ -103,12 +109,13 @@ def main(argv=None) -> None:
         best = {}
         for _ in range(args.rounds):
             for name, path in sides.items():
-                for i, row in enumerate(run_side(path, seeds_file)):
+                for i, row in enumerate(run_side(path, seeds_file, args.threads)):
                     old = best.get((name, i))
                     if old is None or row["eval_s"] < old["eval_s"]:
                         best[(name, i)] = row
     print(f"one VesicleOperator.evaluate, Ca_B = {CA_B:g}; before = {args.baseline}, after = "
-          f"this tree; min of {args.repeats} x {args.rounds} rounds; "
+          f"this tree; min of {args.repeats} x {args.rounds} rounds; numba threads "
+          f"{args.threads or 'default'}; "
           f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     print(f"{'nu':>5} {'lam':>5} {'N':>3} {'panels':>6} {'before ms':>9} {'after ms':>9} "
           f"{'speed-up':>8} {'dV/U':>8} {'d dp':>8} {'d g_max':>8} {'d res':>8}")
