@@ -312,7 +312,8 @@ def influence_pair(a: PanelSet, b: PanelSet, *, near: float | None = NEAR_FACTOR
     The ring Stokeslet is reciprocal, :math:`M_{\alpha\beta}(x_0; x)/r = M_{\beta\alpha}(x; x_0)/r_0`
     (Pozrikidis 1992), so the far entries of one matrix give those of the other; near panels
     are integrated by the graded rule as in :func:`influence`. Equal to the two calls of
-    :func:`influence` to rounding (tests/bem/test_quadrature_self_rule.py).
+    :func:`influence` to rounding (tests/bem/test_quadrature_self_rule.py). Pass the larger set
+    as ``a`` (:func:`bem.kernels.cross_influence_matrix`).
     """
     if a.order != b.order:
         raise InvalidParameterError("b.order", b.order, f"equal to a.order = {a.order}")
@@ -325,9 +326,10 @@ def influence_pair(a: PanelSet, b: PanelSet, *, near: float | None = NEAR_FACTOR
     gx, gw = gauss_table()
     out_ab = np.empty((2 * a.n_nodes, 2 * b.n_nodes))
     out_ba = np.empty((2 * b.n_nodes, 2 * a.n_nodes))
-    kernels.cross_influence_matrix(a.x, a.r, a.w, a.cx, a.cr, b.x, b.r, b.w, b.cx, b.cr, t,
-                                   barycentric_weights(p), gx, gw, as_near, as_tol, out_ab,
-                                   out_ba)
+    kernel = (kernels.cross_influence_matrix_serial if a.n_nodes * b.n_nodes < SERIAL_WORK
+              else kernels.cross_influence_matrix)
+    kernel(a.x, a.r, a.w, a.cx, a.cr, b.x, b.r, b.w, b.cx, b.cr, t, barycentric_weights(p), gx,
+           gw, as_near, as_tol, out_ab, out_ba)
     return out_ab, out_ba
 
 
