@@ -38,8 +38,8 @@ __all__ = [
     "influence_matrix_serial",
     "panel_integral",
     "ring_stokeslet",
-    "self_panel_integral",
     "ring_stokeslet_phi",
+    "self_panel_integral",
 ]
 
 _PI = math.pi

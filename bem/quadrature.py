@@ -35,7 +35,6 @@ import numpy as np
 
 from lubrication.checks import InvalidParameterError, check_positive, check_range
 
-
 __all__ = [
     "DEFAULT_ORDER",
     "DEFAULT_TOL",
@@ -283,7 +282,7 @@ def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NE
     as_tol = float(check_range("tol", tol, 1e-16, 1e-2))
     p = panels.order
     as_near = near_factor(p, as_tol) if near is None else float(check_positive("near", near))
-    from . import kernels      # lazy: input checks of the solvers run before numba loads
+    from . import kernels  # lazy: input checks of the solvers run before numba loads
 
     t, _ = gauss_legendre(p)
     gx, gw = gauss_table()

@@ -43,10 +43,10 @@ import numpy as np
 from bem.membrane import tension_profile
 from bem.threads import single_threaded_blas
 from bem.vesicle import VesicleOperator, vesicle_discretisation
-shapes, seeds, repeats = pickle.load(open(sys.argv[1], "rb"))
+shapes, seeds, repeats, CA_B = pickle.load(open(sys.argv[1], "rb"))
 rows = []
 for (nu, lam, n, _), seed in zip(shapes, seeds):
-    op = VesicleOperator(nu, lam, %(ca_b)r, vesicle_discretisation(n), seed)
+    op = VesicleOperator(nu, lam, CA_B, vesicle_discretisation(n), seed)
     curve = op.curve(seed.modes)
     with single_threaded_blas():
         st = op.evaluate(curve)                      # compiles numba on the first shape
@@ -59,7 +59,7 @@ for (nu, lam, n, _), seed in zip(shapes, seeds):
     rows.append({"modes": n, "panels": op.disc.n_panels, "eval_s": best, "V": st["V"],
                  "dp": st["dp"] * lam, "gmax": gmax, "residual": st["residual"]})
 print(json.dumps(rows))
-""" % {"ca_b": CA_B}
+"""
 
 
 def make_seeds() -> list:
@@ -103,7 +103,7 @@ def main(argv=None) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         seeds_file = os.path.join(tmp, "seeds.pkl")
         with open(seeds_file, "wb") as fh:
-            pickle.dump((SHAPES, seeds, args.repeats), fh)
+            pickle.dump((SHAPES, seeds, args.repeats, CA_B), fh)
         base_dir = export(args.baseline, os.path.join(tmp, "base"))
         sides = {"before": base_dir, "after": str(ROOT)}
         best = {}
