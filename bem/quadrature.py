@@ -1,13 +1,25 @@
 r"""High-order panels on axisymmetric generating curves and their quadrature rules.
 
 A generating curve is cut into panels; each panel carries ``p`` Gauss–Legendre nodes in its
-parameter. Far from a target the nodes' own rule is used (Nyström); a target on the panel (the
-logarithmic self-panel singularity of :math:`M_{xx}, M_{rr}`, the :math:`\hat x\ln d` terms of
-:math:`M_{xr}, M_{rx}`) or close to it (distance below ``near`` panel lengths) is handled by
-splitting the panel at the nearest point and integrating each side on a geometric mesh graded
-toward it, with the density interpolated from the nodes (:func:`bem.kernels.panel_integral`).
-The convergence of the panel rule is algebraic of order ~p in the panel size for near and self
-interactions, and spectral in p.
+parameter. Far from a target the nodes' own rule is used (Nyström). A target close to a panel
+(distance below ``near`` panel lengths) is handled by splitting the panel at the nearest point
+and integrating each side on a geometric mesh graded toward it, with the density interpolated
+from the nodes (:func:`bem.kernels.panel_integral`). A target that is one of the panel's own
+nodes (the logarithmic self-panel singularity of :math:`M_{xx}, M_{rr}`, the
+:math:`\hat x\ln d` terms of :math:`M_{xr}, M_{rx}`) takes a fixed rule per node instead
+(:func:`self_rule`: 2 x 40 kernel calls, exact for polynomial + polynomial x log on each side of
+the node), unless the panel comes within one panel length of the axis, where the mirror
+singularity of :math:`s^2 = \hat x^2 + (r + r_0)^2` is near, or ``tol`` < 1e-14; there the
+graded mesh (~500 kernel calls at tol 1e-14) is kept. The convergence of the panel rule is
+algebraic of order ~p in the panel size for near and self interactions, and spectral in p.
+
+Measured on one BEM evaluation of the steady vesicle (lubrication seeds at (ν, λ) = (0.9, 1.0),
+32 modes; (0.61, 1.39), 40 modes; (0.6, 1.94), 64 modes; Ca_B = 50;
+tests/benchmarks/bench_evaluation.py): the fixed self rule changes V/U, Δp⁺ and γ_max by
+≤ 3e-13 relative, the self blocks are within 5e-12 of the graded rule at tol 1e-16 (relative
+to each row's largest entry; the graded rule at its default 1e-14 is 4e-12 off on the pole
+panels), and the self integrals take 14 000 instead of 87 500 of the 204 000 kernel calls of the
+assembly at (0.9, 1.0) (on one thread the membrane-source block fell from 43 to 24 ms).
 
 The heavy lifting is in :mod:`bem.kernels`; this module builds the rule tables and the
 :class:`PanelSet` arrays in numpy and checks the user's inputs.
@@ -23,7 +35,6 @@ import numpy as np
 
 from lubrication.checks import InvalidParameterError, check_positive, check_range
 
-
 __all__ = [
     "DEFAULT_ORDER",
     "DEFAULT_TOL",
@@ -34,15 +45,34 @@ __all__ = [
     "gauss_legendre",
     "gauss_table",
     "influence",
+    "influence_pair",
     "integrate_panel",
     "near_factor",
     "panels_on_curve",
+    "self_rule",
 ]
 
 DEFAULT_ORDER = 16   # Gauss nodes per panel
-DEFAULT_TOL = 1e-14  # target accuracy of the singular and near-singular panel integrals
+#: target accuracy of the graded (near-singular, and self near the axis) panel integrals. Kept
+#: at 1e-14: with the self panels on the fixed rule it governs the near panels only, and 1e-12,
+#: 1e-11, 1e-10 change V/U, Δp⁺, γ_max of the three vesicle seeds (module docstring) by up to
+#: 3.1e-11, 2.8e-10, 3.1e-9 (the 64-mode seed at (0.6, 1.94) the worst) while saving only 4-6 %
+#: of the near-panel kernel calls (the grading depth is set by the distance, not by tol)
+DEFAULT_TOL = 1e-14
 NEAR_FACTOR = None   # None: near_factor(p, tol), the distance where the p-point rule meets tol
 NMAX = 24            # highest Gauss order of the graded sub-intervals
+#: the fixed self-panel rule is exact for P_j(u) and P_j(u) ln u on each side, j < 28: with
+#: j < 20 the self blocks of the vesicle seeds were 1e-11 to 3e-11 off; from 24 on the
+#: difference to the graded rule at tol 1e-16 stays at its floor, 5e-13 to 5e-12
+SELF_BASIS = 28
+SELF_RULE_TOL = 1e-14  # the fixed self-panel rule serves tol >= this (graded below)
+#: ... on panels whose nodes stay this many panel lengths off the axis: with the fixed rule on
+#: the pole panels too (r_min ~ 0.01 length) their self blocks were 1e-6 off
+AXIS_CLEARANCE = 1.0
+#: blocks with fewer (targets x source nodes) are assembled on the calling thread: starting
+#: numba's parallel region costs more than such a block (measured on the 2 shared cores at load
+#: 5: the vesicle's inlet block, 176 x 48, 0.74 ms on one thread, 4-8 ms on two)
+SERIAL_WORK = 40_000
 
 
 @cache
@@ -77,6 +107,66 @@ def gauss_table(nmax: int = NMAX) -> tuple[np.ndarray, np.ndarray]:
     gx.flags.writeable = False
     gw.flags.writeable = False
     return gx, gw
+
+
+def _graded_rule(sigma: float = 0.15, levels: int = 40, n: int = 30):
+    """Composite Gauss rule on [0, 1] on a geometric mesh graded toward 0 (smallest node
+    ~1e-33): exact to rounding for polynomials of degree < 60 times ln u."""
+    g, w = gauss_legendre(n)
+    hi = sigma ** np.arange(levels)
+    lo = hi * sigma
+    u = lo[:, None] + (hi - lo)[:, None] * 0.5 * (g + 1.0)
+    return u.ravel(), (0.5 * (hi - lo)[:, None] * w).ravel()
+
+
+@cache
+def log_rule(n_basis: int = SELF_BASIS) -> tuple[np.ndarray, np.ndarray]:
+    r"""Positive rule (u_i, w_i) on [0, 1] exact for :math:`P_j(2u-1)` and :math:`P_j(2u-1)\ln u`,
+    j < n_basis, with 2 n_basis nodes in [1e-8, 1].
+
+    Built by non-negative least squares (Carathéodory: a positive rule with at most as many
+    nodes as conditions exists) from the moments of :func:`_graded_rule`, with the conditions
+    orthonormalised in that rule's inner product; nodes below 1e-8 are excluded so that no
+    node of a self-panel rule rounds onto the target. The moments are matched to ~1.5e-15.
+    """
+    from scipy.optimize import nnls
+
+    u, w = _graded_rule()
+    V = np.polynomial.legendre.legvander(2.0 * u - 1.0, n_basis - 1)
+    phi = np.hstack([V, V * np.log(u)[:, None]]) * np.sqrt(w)[:, None]
+    q, _ = np.linalg.qr(phi)
+    keep = u > 1e-8
+    z, _ = nnls((q.T / np.sqrt(w))[:, keep], q.T @ np.sqrt(w), maxiter=50 * n_basis)
+    sel = np.nonzero(z)[0]
+    ur, wr = u[keep][sel], z[sel]
+    ur.flags.writeable = False
+    wr.flags.writeable = False
+    return ur, wr
+
+
+@cache
+def self_rule(p: int, n_basis: int = SELF_BASIS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""Fixed rules for a target at node k of a p-node panel: parameters st[k], weights sw[k]
+    in t in [-1, 1] and Lagrange values sell[k] (m, p) of the nodes' basis at st[k].
+
+    The panel is split at the target t_k and :func:`log_rule` is mapped onto each side:
+    exact for :math:`a(t) + b(t)\ln|t - t_k|` with a, b polynomials of degree < n_basis on
+    each side, the form of :math:`M_{\alpha\beta}\,\ell_j\,|X'|` on the panel (the kernel's
+    logarithm is :math:`\ln d = \ln|t - t_k| +` analytic, as long as the ring does not come near
+    the axis, where :math:`s^2 = \hat x^2 + (r + r_0)^2` vanishes).
+    """
+    t, _ = gauss_legendre(p)
+    u, w = log_rule(n_basis)
+    left, right = 1.0 + t[:, None], 1.0 - t[:, None]
+    st = np.hstack([t[:, None] - left * u, t[:, None] + right * u])
+    sw = np.hstack([left * w, right * w])
+    bw = barycentric_weights(p)
+    diff = st[:, :, None] - t[None, None, :]
+    ell = bw / diff
+    sell = ell / ell.sum(axis=2, keepdims=True)
+    for a in (st, sw, sell):
+        a.flags.writeable = False
+    return st, sw, sell
 
 
 def _legendre_coefficients(values: np.ndarray, p: int) -> np.ndarray:
@@ -172,7 +262,9 @@ def near_factor(p: int, tol: float = DEFAULT_TOL) -> float:
 
     The p-point rule converges like rho^(-2p), rho the Bernstein ellipse through the target's
     pre-image; a target at distance d from a panel of length h has rho >~ 4 d/h, so the rule
-    is trusted for d/h > rho*/4 with rho* = tol^(-1/(2p)), and never closer than one length.
+    is trusted for d/h > rho*/4 with rho* = tol^(-1/(2p)), and never closer than one length
+    (the estimate alone gives 0.68 lengths for p = 16 at 1e-14; at 0.8 lengths V/U and Δp⁺ of
+    the vesicle at (0.6, 1.94), 64 modes, moved by 6e-7).
     """
     return max(1.0, float(tol) ** (-1.0 / (2.0 * int(p))) / 4.0)
 
@@ -190,14 +282,54 @@ def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NE
     as_tol = float(check_range("tol", tol, 1e-16, 1e-2))
     p = panels.order
     as_near = near_factor(p, as_tol) if near is None else float(check_positive("near", near))
-    from . import kernels      # lazy: input checks of the solvers run before numba loads
+    from . import kernels  # lazy: input checks of the solvers run before numba loads
 
     t, _ = gauss_legendre(p)
     gx, gw = gauss_table()
-    out = np.empty((2 * tx.size, 2 * panels.n_nodes))
-    kernels.influence_matrix(tx, tr, panels.x, panels.r, panels.w, panels.cx, panels.cr,
-                             t, barycentric_weights(p), gx, gw, as_near, as_tol, out)
+    n = panels.n_nodes
+    self_node = np.full(tx.size, -1, dtype=np.int64)
+    if (tx.size >= n and np.array_equal(tx[:n], panels.x.ravel())
+            and np.array_equal(tr[:n], panels.r.ravel())):
+        self_node[:n] = np.arange(n)
+    fixed = panels.r.min(axis=1) >= AXIS_CLEARANCE * panels.lengths
+    if as_tol < SELF_RULE_TOL:
+        fixed[:] = False
+    st, sw, sell = self_rule(p)
+    out = np.empty((2 * tx.size, 2 * n))
+    kernel = (kernels.influence_matrix_serial if tx.size * n < SERIAL_WORK
+              else kernels.influence_matrix)
+    kernel(tx, tr, panels.x, panels.r, panels.w, panels.cx, panels.cr, t, barycentric_weights(p),
+           gx, gw, as_near, as_tol, self_node, fixed, st, sw, sell, out)
     return out
+
+
+def influence_pair(a: PanelSet, b: PanelSet, *, near: float | None = NEAR_FACTOR,
+                   tol: float = DEFAULT_TOL) -> tuple[np.ndarray, np.ndarray]:
+    r"""``(influence(a nodes, b), influence(b nodes, a))`` of two disjoint panel sets (say a
+    membrane and the tube wall) with one ring Stokeslet per far pair of nodes.
+
+    The ring Stokeslet is reciprocal, :math:`M_{\alpha\beta}(x_0; x)/r = M_{\beta\alpha}(x; x_0)/r_0`
+    (Pozrikidis 1992), so the far entries of one matrix give those of the other; near panels
+    are integrated by the graded rule as in :func:`influence`. Equal to the two calls of
+    :func:`influence` to rounding (tests/bem/test_quadrature_self_rule.py). Pass the larger set
+    as ``a`` (:func:`bem.kernels.cross_influence_matrix`).
+    """
+    if a.order != b.order:
+        raise InvalidParameterError("b.order", b.order, f"equal to a.order = {a.order}")
+    as_tol = float(check_range("tol", tol, 1e-16, 1e-2))
+    p = a.order
+    as_near = near_factor(p, as_tol) if near is None else float(check_positive("near", near))
+    from . import kernels
+
+    t, _ = gauss_legendre(p)
+    gx, gw = gauss_table()
+    out_ab = np.empty((2 * a.n_nodes, 2 * b.n_nodes))
+    out_ba = np.empty((2 * b.n_nodes, 2 * a.n_nodes))
+    kernel = (kernels.cross_influence_matrix_serial if a.n_nodes * b.n_nodes < SERIAL_WORK
+              else kernels.cross_influence_matrix)
+    kernel(a.x, a.r, a.w, a.cx, a.cr, b.x, b.r, b.w, b.cx, b.cr, t, barycentric_weights(p), gx,
+           gw, as_near, as_tol, out_ab, out_ba)
+    return out_ab, out_ba
 
 
 def integrate_panel(x0: float, r0: float, panels: PanelSet, index: int, density,

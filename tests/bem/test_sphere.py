@@ -93,11 +93,16 @@ def test_null_multiplier_and_residual_are_small():
 
 # ------------------------------------------------------------------ truncation of the tube
 def test_answer_is_insensitive_to_the_wall_length():
-    """Default half-length lam + 7.8 R; extending it to lam + 11 R changes nothing."""
+    """Default half-length lam + 7.8 R; extending it to lam + 11 R changes nothing.
+
+    drag_K of this near-contact sphere (K ~ 469) carries ~1e-12 of rounding: with the kernels
+    of revision 0e10f54 a wall 1e-6 R longer already moved it by 1.1e-12, and rounding-level
+    changes of the kernels move the difference below between 1.3e-13 and 1.3e-12; so drag_K is
+    held to 3e-12, V/U and dp+ (1e-14 apart) to 1e-12."""
     a = solve_sphere_mesh(0.9, 8)
     b = solve_sphere_mesh(0.9, 8, half_length=0.9 + 11.0)
-    for k in ("V_over_U", "dp_plus_R", "drag_K"):
-        assert abs(a[k] / b[k] - 1) < 1e-12, k
+    for k, bound in (("V_over_U", 1e-12), ("dp_plus_R", 1e-12), ("drag_K", 3e-12)):
+        assert abs(a[k] / b[k] - 1) < bound, k
 
 
 def test_truncation_error_decays_like_exp_minus_4p5_x():
