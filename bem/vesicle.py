@@ -146,7 +146,13 @@ from .drop import DropDiscretisation, DropOperator, _panels_for
 from .drop import _mode_count as _drop_mode_count  # one check, the vesicle's MAX_MODES
 from .membrane import bending_force, tension_basis, tension_profile
 from .newton import difference_jacobian, levenberg_marquardt, valley_levenberg_marquardt
-from .quadrature import DEFAULT_ORDER, barycentric_weights, gauss_legendre, influence
+from .quadrature import (
+    DEFAULT_ORDER,
+    barycentric_weights,
+    gauss_legendre,
+    influence,
+    influence_pair,
+)
 from .shape import (
     SpectralCurve,
     equidistributing_density,
@@ -275,17 +281,15 @@ class VesicleOperator(DropOperator):
         Q[0::2, 1:], Q[1::2, 1:] = T[:, 0].T, T[:, 1].T
         rb, wb = drop.r.ravel(), drop.w.ravel()
         dp = -4.0 * (rb * (1.0 - rb * rb) * wb) @ Q[0::2]                # per column
-        w = self.wall
-        tx = np.concatenate([drop.x.ravel(), w.x.ravel()])
-        tr = np.concatenate([rb, w.r.ravel()])
-        A = influence(tx, tr, drop, tol=tol)
-        B = influence(drop.x.ravel(), rb, w, tol=tol)
+        # membrane on itself; membrane on the wall and wall on the membrane in one pass (the
+        # ring Stokeslet is reciprocal: one kernel call per far node pair)
+        S_dd = influence(drop.x.ravel(), rb, drop, tol=tol)
+        S_wd, B = influence_pair(self.wall, drop, tol=tol)
         inl = influence(drop.x.ravel(), rb, self.inlet, tol=tol)
         col_dp = inl[:, 0::2].sum(axis=1) / _EIGHT_PI
-        AQ = (A @ Q) / _EIGHT_PI
-        qw = -sla.lu_solve(self.lu_wall, AQ[2 * nd:] + np.outer(self.col_dp_wall, dp),
-                            check_finite=False)
-        Uc = AQ[: 2 * nd] + (B @ qw) / _EIGHT_PI + np.outer(col_dp, dp)
+        qw = -sla.lu_solve(self.lu_wall, (S_wd @ Q) / _EIGHT_PI
+                           + np.outer(self.col_dp_wall, dp), check_finite=False)
+        Uc = (S_dd @ Q) / _EIGHT_PI + (B @ qw) / _EIGHT_PI + np.outer(col_dp, dp)
         u0 = Uc[:, 0].copy()
         u0[0::2] += poiseuille(rb)
         return drop, u0, Uc[:, 1:], float(dp[0]), dp[1:], qw
