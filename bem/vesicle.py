@@ -866,8 +866,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         max_modes = min(MAX_MODES, first + 40 if long else 80)
     if n_modes is not None:
         sequence, rebuild = [max(6, round(2 * n_modes / 3)), n_modes], None
-    elif bem_seed:                   # from the seed's own mode count (a refit to fewer
-        start = rung_modes if continuation else initial.modes.size     # modes loses it)
+    elif bem_seed:       # from the rungs' mode count (a refit to fewer modes loses them);
+        # a continued result restarts low (its next point needs no more modes than it did)
+        start = rung_modes if continuation else min(initial.modes.size, first)
         start = min(max(16, 8 * round(start / 8)), max_modes - 16)
         sequence, rebuild = list(range(start, max_modes + 1, 8)), None
     elif valley:                     # carriers every 16 modes below the re-built density

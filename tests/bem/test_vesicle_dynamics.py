@@ -134,9 +134,11 @@ def test_quiescent_tension_of_a_quasi_spherical_vesicle_tends_to_minus_6_kappa_o
 # ------------------------------------------------------------------ steady state (shared)
 @pytest.fixture(scope="module")
 def steady():
-    """Newton steady state at (0.98, 0.3), pair 11/16 modes (~20 s). Measured: V/U 1.88137869,
+    """Newton steady state at (0.98, 0.3), pair 11/16 modes, uniform arc length (~20 s).
+    Measured: V/U 1.88137869,
     residual max|u - V e_x| 1.19e-5 (its normal part 9.5e-6)."""
-    res = solve_vesicle(NU, LAM, ca_b=CA_B, n_modes=16, tol=0.5, residual_tol=10.0)
+    res = solve_vesicle(NU, LAM, ca_b=CA_B, n_modes=16, tol=0.5, residual_tol=10.0,
+                        density="uniform")
     assert res.success, res.message
     return res
 

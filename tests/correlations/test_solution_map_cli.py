@@ -163,7 +163,7 @@ def test_interrupted_build_resumes_with_only_the_missing_points(tmp_path, sig):
     _, err = proc.communicate(timeout=30)
     if sig == signal.SIGINT:
         assert proc.returncode == 130, err
-        assert time.monotonic() - t0 < 3.0
+        assert time.monotonic() - t0 < 15.0             # prompt, with room for a loaded machine
         last = err.strip().splitlines()[-1]
         assert "interrupted" in last and "resume" in last and "Traceback" not in err
     else:
