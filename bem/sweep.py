@@ -6,18 +6,23 @@ of equal volume), ``lam_c`` the critical confinement of ``nu``, ``ca_b`` = eta U
 
 Method (natural-parameter continuation in lam): the points are solved in order of increasing
 lam; the first starts from the seed :func:`bem.vesicle.solve_vesicle` chooses (the lubrication
-shape, or the caller's ``initial``), the second from the first converged result (``initial=``
-that :class:`~bem.results.VesicleResult`), every later one from the secant prediction of the
-last two converged results (:func:`secant_seed`, ``secant=False`` to start from the last one). Going
+shape, or the caller's ``initial``), every later one from the last *converged* result
+(``initial=`` that :class:`~bem.results.VesicleResult`, whose spectral shape is the seed). Going
 from the less to the more confined shape is the direction :mod:`bem.vesicle` recommends: a cold
 start near lam_c can drift to a spurious, nearly closed film. A point that fails is kept in the
 output with ``success`` False and its reason, and the next point starts again from the last
 converged one.
 
-Each point costs a full :func:`~bem.vesicle.solve_vesicle`. Measured on 2 shared cores at
-nu = 0.98, Ca_B = 50, 16 modes: lam = 0.3 cold 15-27 s, lam = 0.4 continued from 0.3 in 6 s
-(cold: 29 s); at the default automatic refinement (up to 40 modes) and nearer lam_c a point takes
-minutes, a sweep of ten points tens of minutes. Progress goes to the ``bem.sweep`` logger (INFO, one
+A secant predictor (the shape extrapolated from the two previous converged points) was
+measured and is not used: on 10 points at ν = 0.8, λ/λc = 0.3 … 0.95 (Ca_B = 50) the sweep took
+103 s with it and its last point, 0.878 → 0.95 λc, ended in a spurious minimum (residual 5e-2);
+from the last converged result it took 75 s with every point converged (1.8–6.6 s per point
+below 0.9 λc, 38 s at 0.95).
+
+Each point costs a full :func:`~bem.vesicle.solve_vesicle` (automatic refinement from 16 modes,
+on the density built on the previous shape): seconds per point below 0.9 λc, tens of seconds
+near λc (the 10-point sweep above; ``python tests/benchmarks/bench_vesicle.py --cases sweep``).
+Progress goes to the ``bem.sweep`` logger (INFO, one
 line per point) and to the optional ``progress`` callback.
 
 Resource envelope: at most :data:`MAX_POINTS` = 100 points (checked before any solve; at
@@ -46,8 +51,7 @@ import numpy as np
 from lubrication.checks import Deadline, InvalidParameterError, as_finite
 from lubrication.io import atomic_write
 
-__all__ = ["MAX_POINTS", "SWEEP_COLUMNS", "save_sweep", "secant_seed", "sweep_table",
-           "sweep_vesicle"]
+__all__ = ["MAX_POINTS", "SWEEP_COLUMNS", "save_sweep", "sweep_table", "sweep_vesicle"]
 
 log = logging.getLogger(__name__)
 
@@ -112,27 +116,10 @@ def _with_runtime(res, seconds: float):
     return dataclasses.replace(res, timings={**res.timings, "total_s": seconds})
 
 
-def secant_seed(a, b, lam: float):
-    r"""Initial shape at confinement ``lam`` predicted from two converged results ``a``, ``b``
-    (:class:`~bem.results.VesicleResult`, ``a.lam < b.lam``, the same ν) by the secant along
-    the branch: both shapes are refitted with uniform arc-length density and the same number of
-    modes N (so that a mode means the same shape change), and their tangent-angle modes are
-    extrapolated linearly in λ, :math:`c = c_b + (c_b - c_a)(\lambda - \lambda_b)/(\lambda_b -
-    \lambda_a)`; the volume is that of ``lam`` (Allgower & Georg 1990, §2.2, predictor of
-    natural-parameter continuation). Returns a :class:`bem.shape.SpectralCurve`.
-    """
-    from .shape import SpectralCurve, fit_curve
-
-    n = max(a.modes.size, b.modes.size)
-    ca, cb = (fit_curve(r.curve().sample, 0.0, 1.0, n).modes for r in (a, b))
-    f = (lam - b.lam) / (b.lam - a.lam)
-    return SpectralCurve.closed(cb + f * (cb - ca), volume=4.0 / 3.0 * math.pi * lam**3)
-
-
 def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
                   lam_ratios: Sequence[float] | None = None, ca_b: float = 50.0,
                   progress: Progress | None = None, max_time: float | None = None,
-                  secant: bool = True, **solver_kwargs) -> list:
+                  **solver_kwargs) -> list:
     r"""Steady vesicles at several confinements, solved by continuation in increasing lam.
 
     Parameters
@@ -151,9 +138,6 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
         Passed to every :func:`bem.vesicle.solve_vesicle` call (``n_modes``, ``tol``,
         ``residual_tol``, ``max_modes``, ``density_terms``, ...). ``initial`` seeds the first
         point only; later points start from the last converged result.
-    secant : bool
-        Start each point after the second from the secant prediction of the last two
-        converged results (:func:`secant_seed`) instead of the last one.
     max_time : float, optional
         Wall-time budget of the whole sweep [s] (:class:`lubrication.checks.Deadline`): each
         point gets what is left; once spent, the remaining points are returned unsolved
@@ -198,7 +182,6 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
     n = int(lam.size)
     results: list = [None] * n
     previous = start                                   # last converged result (or the seed)
-    converged: list = []                               # this sweep's converged results
     for i, k in enumerate(order, start=1):
         clock = time.perf_counter()
         if deadline.expired():
@@ -206,16 +189,13 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
                                 success=False, message=f"not solved: {deadline.message()}")
         else:
             left = None if max_time is None else max_time - (time.monotonic() - started)
-            seed = (secant_seed(*converged[-2:], float(lam[k]))
-                    if secant and len(converged) >= 2 else previous)
-            res = vesicle.solve_vesicle(nu, float(lam[k]), ca_b=ca_b, initial=seed,
+            res = vesicle.solve_vesicle(nu, float(lam[k]), ca_b=ca_b, initial=previous,
                                         max_time=max(left, 1e-3) if left is not None
                                         else None, **solver_kwargs)
         seconds = time.perf_counter() - clock
         res = results[k] = _with_runtime(res, seconds)
         if res.success:
             previous = res
-            converged.append(res)
         log.info("sweep nu=%g point %d/%d: lam=%.6g (lam/lam_c=%.4f) %s in %.1f s%s", nu, i, n,
                  res.lam, res.lam / lam_c, "converged" if res.success else "NOT converged",
                  seconds, "" if res.success else f" ({res.message})")

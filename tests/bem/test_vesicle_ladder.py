@@ -1,4 +1,4 @@
-"""The steady vesicle solver's ladder: extrapolated error estimate, secant predictor, seeds.
+"""The steady vesicle solver's ladder: extrapolated error estimate, seeds.
 
 Units: R = 1, U the mean velocity, lam = R0/R, Ca_B = eta U R0^2/kappa = 50.
 """
@@ -8,9 +8,6 @@ import math
 import numpy as np
 import pytest
 
-from bem.results import VesicleResult
-from bem.shape import SpectralCurve
-from bem.sweep import secant_seed
 from bem.vesicle import ESTIMATE_SAFETY, MIN_CONTRACTION, _error_estimate, solve_vesicle
 
 
@@ -46,24 +43,6 @@ def test_error_estimate_without_contraction_or_with_few_levels():
     assert _error_estimate(_levels([1.0, 1.5]))["V_over_U"] == pytest.approx(0.5)
     assert _error_estimate(_levels([1.0, 1.1, 1.3]))["V_over_U"] == pytest.approx(0.3)
     assert math.isnan(_error_estimate(_levels([1.0]))["V_over_U"])
-
-
-def _result(modes, lam):
-    return VesicleResult(nu=0.9, lam=lam, lam_c=1.32, ca_b=50.0, success=True, message="",
-                         modes=np.asarray(modes, dtype=float), density=np.empty(0))
-
-
-def test_secant_seed_extrapolates_the_modes_linearly_in_lam():
-    """Two shapes (uniform density, 12 modes) at lam = 0.8 and 0.9: the prediction at 1.05 has
-    the modes c_b + 1.5 (c_b - c_a) (to the accuracy of the refit, 1e-9), the closing mode
-    adjusted, and the volume of lam = 1.05."""
-    base = SpectralCurve.closed(np.r_[0.0, 0.08, 0.0, -0.02, np.zeros(8)], volume=1.0).modes
-    step = np.r_[0.0, 0.01, 0.004, 0.002, np.zeros(8)]
-    a, b = _result(base, 0.8), _result(base + step, 0.9)
-    seed = secant_seed(a, b, 1.05)
-    ca, cb = a.curve().modes, b.curve().modes
-    assert np.allclose(seed.modes[1:], (cb + 1.5 * (cb - ca))[1:], atol=1e-9)
-    assert seed.volume() == pytest.approx(4.0 / 3.0 * math.pi * 1.05**3, rel=1e-10)
 
 
 @pytest.mark.slow

@@ -24,8 +24,7 @@ import pytest
 import bem.sweep as sweep_module
 import bem.vesicle
 from bem.results import VESICLE_PROFILE_COLUMNS, VesicleResult
-from bem.shape import SpectralCurve
-from bem.sweep import save_sweep, secant_seed, sweep_vesicle
+from bem.sweep import save_sweep, sweep_vesicle
 from correlations.cli import main
 from lubrication.checks import CannotPassError, InvalidParameterError
 
@@ -106,14 +105,9 @@ def test_each_point_continues_from_the_previous_result(fake):
     out = sweep_vesicle(NU, [0.3, 0.35, 0.4], ca_b=20.0, n_modes=16, tol=1e-2)
     assert fake.calls[0]["initial"] is None                # the solver's own seed
     assert fake.calls[1]["initial"] is out[0]
-    third = fake.calls[2]["initial"]                       # secant from the two before
-    assert isinstance(third, SpectralCurve)
-    assert np.allclose(third.modes, secant_seed(out[0], out[1], 0.4).modes, atol=1e-12)
-    assert third.volume() == pytest.approx(4.0 / 3.0 * np.pi * 0.4**3, rel=1e-10)
+    assert fake.calls[2]["initial"] is out[1]
     assert all(c["ca_b"] == 20.0 and c["n_modes"] == 16 and c["tol"] == 1e-2
                for c in fake.calls)
-    plain = sweep_vesicle(NU, [0.3, 0.35, 0.4], secant=False)
-    assert fake.calls[-1]["initial"] is plain[1]
 
 
 def test_initial_seeds_only_the_first_point(fake):

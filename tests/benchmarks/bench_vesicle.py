@@ -15,7 +15,7 @@ Cases and targets (2-core machine, default options, Ca_B = 50):
 * rbc: (0.61, 1.39), the red blood cell in a 4 um capillary, <= 15 s;
 * long: (0.6, 1.94), lam/lam_c = 0.98, <= 60 s;
 * sweep: 10 points at nu = 0.8, lam/lam_c = 0.3 ... 0.95, by continuation
-  (:func:`bem.sweep.sweep_vesicle`, secant predictor), <= 60 s in all.
+  (:func:`bem.sweep.sweep_vesicle`), <= 60 s in all.
 """
 
 from __future__ import annotations
