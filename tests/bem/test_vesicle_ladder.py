@@ -5,7 +5,6 @@ Units: R = 1, U the mean velocity, lam = R0/R, Ca_B = eta U R0^2/kappa = 50.
 
 import math
 
-import numpy as np
 import pytest
 
 from bem.vesicle import ESTIMATE_SAFETY, MIN_CONTRACTION, _error_estimate, solve_vesicle
