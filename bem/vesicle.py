@@ -89,7 +89,7 @@ up to ``RUNG_MAX_LENGTH`` = 9 R is reached by continuation in λ/λc (rungs 0.9,
 cold start from the lubrication shape at the target can end in a spurious least-squares minimum (at (0.7, 0.95 λc): residual 2.1e-2 at every
 mode count, V/U 1.09, Δp⁺ 600, where the state reached by the rungs has V/U 1.0503, Δp⁺ 403,
 residual 2.2e-4 at 56 modes; lubrication 1.0504, 391). Below, the seed is the lubrication shape
-at the target or, where the lubrication branch ends above it, at 0.9 λc
+at the target or, where the lubrication branch ends above it and λ/λc ≥ 0.5, at 0.9 λc
 (:func:`lubrication_seed`). Prolate spheroid and capsule seeds, fore-aft symmetric, can end in
 a symmetric least-squares minimum that is not a steady state (at (0.7, 1.2): residual 1.5e-2
 at 40–64 modes, V/U 1.386, where the lubrication-anchored seed gives residual 4e-5 at 48 modes,
@@ -336,12 +336,19 @@ def vesicle_discretisation(n_modes: int, order: int = DEFAULT_ORDER,
 #: (a continuation in lam/lam_c with fewer mesh nodes)
 SEED_LUBRICATION_TOL = 1e-4
 
+#: lam/lam_c from which a failed lubrication seed is replaced by the lubrication shape at
+#: NEAR_CRITICAL lam_c (:func:`lubrication_seed`); below, the spheroid: measured, (0.7, 0.69
+#: lam_c) needs the anchored shape, while at (0.95, 0.2 lam_c) the anchored shape could not be
+#: carried to 24 modes (its curve did not close) where a spheroid seed converges
+LUBRICATION_ANCHOR_FROM = 0.5
+
 def lubrication_seed(nu: float, lam: float, ca_b: float, n_modes: int,
                      density: str = "uniform", density_terms: int = 16,
                      max_time: float | None = None):
     """Spectral curve fitted to the lubrication solution at (nu, lam, ca_b) (see
     :func:`seed_from_lubrication`) or, where the lubrication branch ends above lam (e.g. at
-    lam/lam_c = 0.875 for nu = 0.7, Ca_B = 50), at lam/lam_c = NEAR_CRITICAL: its shape, with
+    lam/lam_c = 0.875 for nu = 0.7, Ca_B = 50) and lam/lam_c >= LUBRICATION_ANCHOR_FROM, at
+    lam/lam_c = NEAR_CRITICAL: its shape, with
     the volume re-imposed at lam by the solver, is on the branch of the genuine steady state
     (at (0.7, 1.2): residual 3.8e-5 at 48 modes, geometric convergence), where a prolate
     spheroid or a capsule ends in a fore-aft symmetric least-squares minimum that is not a
@@ -355,7 +362,8 @@ def lubrication_seed(nu: float, lam: float, ca_b: float, n_modes: int,
     deadline = Deadline(max_time)
     lub = None
     for target in (lam, NEAR_CRITICAL * critical_confinement(nu)):
-        if lub is not None and (lub.success or target <= lam or deadline.expired()):
+        if lub is not None and (lub.success or target <= lam or deadline.expired()
+                                or lam < LUBRICATION_ANCHOR_FROM * target / NEAR_CRITICAL):
             break
         try:
             lub = solve_lubrication(nu, target, ca_b=ca_b, tol=SEED_LUBRICATION_TOL,
@@ -866,9 +874,11 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         max_modes = min(MAX_MODES, first + 40 if long else 80)
     if n_modes is not None:
         sequence, rebuild = [max(6, round(2 * n_modes / 3)), n_modes], None
-    elif bem_seed:       # from the rungs' mode count (a refit to fewer modes loses them);
-        # a continued result restarts low (its next point needs no more modes than it did)
-        start = rung_modes if continuation else min(initial.modes.size, first)
+    elif bem_seed:       # from the seed's mode count near lam_c (a refit to fewer modes
+        # loses the thin film: from a 0.95 lam_c result refitted to 16 modes, the film of
+        # (0.98, 0.98 lam_c) closed); below, a continued result restarts low
+        start = (rung_modes if continuation else initial.modes.size if ratio > NEAR_CRITICAL
+                 else min(initial.modes.size, first))
         start = min(max(16, 8 * round(start / 8)), max_modes - 16)
         sequence, rebuild = list(range(start, max_modes + 1, 8)), None
     elif valley:                     # carriers every 16 modes below the re-built density
