@@ -897,7 +897,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                              message=f"{deadline.message()} ({what})")
     if continuation:
         rung_kw = {"ca_b": ca_b, "n_modes": rung_modes,
-                   "tol": 0.5, "residual_tol": 10.0, "order": order, "density": density,
+                   "tol": 0.5, "tension_tol": 0.5, "residual_tol": 10.0, "order": order,
+                   "density": density,
                    "density_terms": density_terms, "continuation": False}
         rung = None
         for q in _rungs(ratio):
