@@ -55,7 +55,7 @@ def bench_viscosity(n: int = 1_000_000, repeat: int = 5) -> dict[str, list[float
 
 
 def bench_lubrication() -> list[tuple[str, float, float]]:
-    """Lubrication solver (issue 4): (name, seconds, target) for warm, cold and sweep runs."""
+    """Lubrication solver: (name, seconds, target) for warm, cold and sweep runs."""
     import numpy as np
 
     from lubrication.solve import solve_lubrication, sweep_lubrication

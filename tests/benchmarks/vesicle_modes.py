@@ -5,9 +5,9 @@ Run with ``python tests/benchmarks/vesicle_modes.py [--nu 0.6] [--lam 1.94] [--m
 density is re-built on it once and every level of ``--modes`` is solved to its least-squares
 minimum with that density (:func:`bem.vesicle.mode_convergence`). The ratios are the observed
 contraction of the successive differences per level (a constant ratio rho < 1: geometric
-convergence, remaining error ~ rho/(1 - rho) times the last difference). Issue 6 asks for the
-observed order at (0.6, 1.94); about 5 min for the default solve and 2-4 min per level on 2
-cores.
+convergence, remaining error ~ rho/(1 - rho) times the last difference). The steady solver's
+validation asks for the observed order at (0.6, 1.94); about 5 min for the default solve and
+2-4 min per level on 2 cores.
 """
 
 from __future__ import annotations
