@@ -439,6 +439,23 @@ def _store(out, i, base, acc):
 
 
 @numba.njit(cache=True)
+def _near_panel(x0, r0, px, pr, pw, P, near):
+    """(panel P of the set is near the target (x0, r0), nearest node of P): near when a node
+    lies within ``near`` panel lengths."""
+    p = px.shape[1]
+    length = 0.0
+    dmin = math.inf
+    best = 0
+    for k in range(p):
+        length += pw[P, k]
+        dd = (px[P, k] - x0) ** 2 + (pr[P, k] - r0) ** 2
+        if dd < dmin:
+            dmin = dd
+            best = k
+    return math.sqrt(dmin) < near * length, best
+
+
+@numba.njit(cache=True)
 def _influence_rows(c, n_chunks, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol,
                     self_node, fixed, st, sw, sell, out):
     """Rows of the targets i = c, c + n_chunks, ... of :func:`influence_matrix`."""
@@ -449,22 +466,13 @@ def _influence_rows(c, n_chunks, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, n
         x0 = tx[i]
         r0 = tr[i]
         for P in range(npan):
-            length = 0.0
-            dmin = math.inf
-            best = 0
-            for k in range(p):
-                length += pw[P, k]
-                dd = (px[P, k] - x0) ** 2 + (pr[P, k] - r0) ** 2
-                if dd < dmin:
-                    dmin = dd
-                    best = k
-            dmin = math.sqrt(dmin)
+            is_near, best = _near_panel(x0, r0, px, pr, pw, P, near)
             base = 2 * P * p
             if self_node[i] >= 0 and self_node[i] // p == P and fixed[P]:
                 k0 = self_node[i] - P * p
                 self_panel_integral(x0, r0, pcx[P], pcr[P], st[k0], sw[k0], sell[k0], acc)
                 _store(out, i, base, acc)
-            elif dmin < near * length:          # start from the nearest node
+            elif is_near:                       # start from the nearest node
                 _graded_panel(x0, r0, pcx[P], pcr[P], tn[best], tn, bw, gx, gw, tol, acc)
                 _store(out, i, base, acc)
             else:
@@ -513,23 +521,6 @@ def influence_matrix_serial(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, 
     for c in range(n_chunks):
         _influence_rows(c, n_chunks, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol,
                         self_node, fixed, st, sw, sell, out)
-
-
-@numba.njit(cache=True)
-def _near_panel(x0, r0, px, pr, pw, P, near):
-    """(panel P of the set is near the target (x0, r0), nearest node of P): near when a node
-    lies within ``near`` panel lengths."""
-    p = px.shape[1]
-    length = 0.0
-    dmin = math.inf
-    best = 0
-    for k in range(p):
-        length += pw[P, k]
-        dd = (px[P, k] - x0) ** 2 + (pr[P, k] - r0) ** 2
-        if dd < dmin:
-            dmin = dd
-            best = k
-    return math.sqrt(dmin) < near * length, best
 
 
 @numba.njit(cache=True)
