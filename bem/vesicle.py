@@ -851,6 +851,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         max_time=max_time)
     deadline = Deadline(max_time)
     clock = time.monotonic()
+    max_modes_given, density_given, valley_given = max_modes, density, valley
     if density not in ("auto", "uniform", *_DENSITIES):
         raise InvalidParameterError("density", density,
                                     '"auto", "uniform", "curvature", "bend" or "film"')
@@ -1007,6 +1008,17 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                 and levels[-1][2]["residual"] <= residual_tol):
             break
     timings["total_s"] = time.perf_counter() - t_start
+    if not levels and bem_seed and not continuation and not deadline.expired():
+        # a continued shape that cannot start at this lam (its volume re-imposed, the film of
+        # (0.98, 0.95 lam_c) closed at 0.98 lam_c): the solver's own seed and continuation
+        log.info("solve_vesicle: the given initial shape was rejected (%s); own seed", message)
+        left = None if max_time is None else max_time - (time.monotonic() - clock)
+        if left is None or left > 0.0:
+            return solve_vesicle(
+                nu, lam, ca_b=ca_b, n_modes=n_modes, tol=tol, tension_tol=tension_tol,
+                residual_tol=residual_tol, max_modes=max_modes_given, order=order, xtol=xtol,
+                max_iter=max_iter, density=density_given, density_terms=density_terms,
+                rung_modes=rung_modes, valley=valley_given, max_time=left)
     if not levels:
         return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=False,
                              message=message, tol=tol, residual_tol=residual_tol,
