@@ -964,12 +964,17 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             break
         disc = vesicle_discretisation(n, order)
         t0 = time.perf_counter()
+        kept = None
         if rebuild is not None and i == rebuild + 1 and levels:
             # the density re-built on the BEM shape of the level before (it resolves what the
             # seed's density misses, e.g. a long vesicle's rear film neck)
-            prev = fit_curve(prev.sample, 0.0, 1.0, n,
-                             density=_DENSITIES[rebuilt](prev, density_terms))
-            consistent = len(levels)
+            kept = prev
+            try:
+                prev = fit_curve(prev.sample, 0.0, 1.0, n,
+                                 density=_DENSITIES[rebuilt](prev, density_terms))
+                consistent = len(levels)
+            except InvalidParameterError:
+                kept = None
         # a carrier starts from a fresh difference Jacobian: one prolonged from the (unfinished)
         # level below led the cold start of (0.6, 1.94) to Δp⁺ 2829 at 32 modes (1778 converged)
         carrier = rebuild is not None and valley and i < rebuild
@@ -981,8 +986,22 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                                         coarse=(levels[-1][1], levels[-1][0])
                                         if levels and not carrier else None)
         except InvalidParameterError as exc:
-            message = f"level with {n} modes: {exc}"
-            break
+            if kept is None:
+                message = f"level with {n} modes: {exc}"
+                break
+            # a density re-built on a shape that does not carry it (at (0.95, 0.2 lam_c) the
+            # 16-mode level stopped at a 5e-2 step and the 24-mode curve on its density had
+            # no positive volume): the ladder keeps the seed's density
+            log.info("solve_vesicle: re-built density rejected at %d modes (%s); kept", n, exc)
+            prev, consistent = kept, 0
+            try:
+                st, op, info = _solve_level(nu, lam, ca_b, disc, prev, n, xtol=xtol,
+                                            max_iter=max_iter, valley=valley,
+                                            deadline=deadline,
+                                            coarse=(levels[-1][1], levels[-1][0]))
+            except InvalidParameterError as exc2:
+                message = f"level with {n} modes: {exc2}"
+                break
         timings[f"modes{n}_s"] = time.perf_counter() - t0
         iterations[f"modes{n}"] = info
         out = _outputs(nu, lam, op, st)
