@@ -110,6 +110,10 @@ Solver paths, before → after (each remaining one with its reason):
   prolonged Jacobian now serves both (before: plain only).
 * seeds: lubrication → spheroid → capsule, into lubrication at the target → lubrication at
   0.9 λc → spheroid → capsule (above).
+* two fallbacks, each met by the map build: a given initial shape that cannot start at the
+  target (its film closes once the volume is re-imposed: (0.98, 0.98 λc) from the 0.95 λc
+  shape) is replaced by the solver's own seed; a re-built density that the next level cannot
+  carry ((0.95, 0.2 λc): no positive volume at 24 modes) is dropped for the seed's.
 
 Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
 
