@@ -412,7 +412,9 @@ def _unphysical_flags(out: dict) -> list[str]:
     e.g. the lubrication model for a short vesicle)."""
     from lubrication.checks import check_output
     flags = []
-    rows = [("", out)] + [(f"point {i + 1}: ", p) for i, p in enumerate(out.get("points") or [])
+    points = out.get("points")
+    rows = [("", out)] + [(f"point {i + 1}: ", p) for i, p in
+                          enumerate(points if isinstance(points, list) else [])
                           if isinstance(p, dict)]
     for where, row in rows:
         for key, quantity in _BOUNDED_KEYS:

@@ -104,6 +104,19 @@ def test_pack_bad_input_exits_2(cli_usage_error, tmp_path):
                                       str(tmp_path / "no" / "such" / "x.json"))
 
 
+def test_pack_writes_the_map_and_reports_its_size(cli, tmp_path):
+    """The packed file holds every converged stored point; the summary counts them (exit 0)."""
+    _fake_build(tmp_path / "b")
+    target = tmp_path / "map.json"
+    code, out, err = cli("map", "pack", str(tmp_path / "b"), "--out", str(target), "--json")
+    assert code == 0, err
+    data = strict_json(out)
+    packed = json.loads(target.read_text())
+    stored = [p for p in read_points(tmp_path / "b") if p["success"]]
+    assert data["points"] == len(packed["columns"]["nu"]) == len(stored) > 0
+    assert data["bytes"] == target.stat().st_size
+
+
 # ----------------------------------------------------------------------------- interrupt, resume
 
 STAND_IN = """
