@@ -86,9 +86,10 @@ Ladder and error estimate (automatic refinement, ``n_modes`` None):
 Seeds and branches. Near lam_c (λ/λc > ``NEAR_CRITICAL`` = 0.9) a vesicle of estimated length
 up to ``RUNG_MAX_LENGTH`` = 9 R is reached by continuation in λ/λc (rungs 0.9, 0.95, 0.975,
 ..., each a ``rung_modes`` = 32 solve from the previous one, the first from lubrication): a
-cold start from the lubrication shape at the target can end in a spurious least-squares minimum (at (0.7, 0.95 λc): residual 2.1e-2 at every
-mode count, V/U 1.09, Δp⁺ 600, where the state reached by the rungs has V/U 1.0503, Δp⁺ 403,
-residual 2.2e-4 at 56 modes; lubrication 1.0504, 391). Below, the seed is the lubrication shape
+cold start from the lubrication shape at the target can end in a spurious least-squares
+minimum (at (0.7, 0.95 λc): residual 2.1e-2 at every mode count, V/U 1.09, Δp⁺ 600, where
+the state reached by the rungs has V/U 1.0503, Δp⁺ 403, residual 2.2e-4 at 56 modes;
+lubrication 1.0504, 391). Below, the seed is the lubrication shape
 at the target or, where the lubrication branch ends above it and λ/λc ≥ 0.5, at 0.9 λc
 (:func:`lubrication_seed`). Prolate spheroid and capsule seeds, fore-aft symmetric, can end in
 a symmetric least-squares minimum that is not a steady state (at (0.7, 1.2): residual 1.5e-2
@@ -675,9 +676,10 @@ def _error_estimate(outs: list[dict]) -> dict:
     (observed at (0.9, 1.0), (0.7, 1.5) and (0.6, 1.94), docs/validation.md); with the last
     two differences :math:`d_1, d_2` and :math:`\rho = d_2/d_1 < 1` the error of the last
     level is :math:`d_2\,\rho/(1-\rho)` (the tail of the geometric series), here multiplied
-    by ``ESTIMATE_SAFETY``, with ρ at least ``MIN_CONTRACTION``. With two levels only, or where the differences do not contract
-    (ρ ≥ 1), the estimate is :math:`d_1 + d_2` (:math:`d_2` for a pair): the raw difference,
-    an overestimate by :math:`(1-\rho)/\rho` for a contracting sequence. NaN for one level.
+    by ``ESTIMATE_SAFETY``, with ρ at least ``MIN_CONTRACTION``. With two levels only, or
+    where the differences do not contract (ρ ≥ 1), the estimate is :math:`d_1 + d_2`
+    (:math:`d_2` for a pair): the raw difference, an overestimate by :math:`(1-\rho)/\rho`
+    for a contracting sequence. NaN for one level.
     """
     out = {}
     for k in _KEYS:
@@ -722,7 +724,8 @@ def _mode_count(name, value) -> int:
 
 
 def check_vesicle_inputs(nu, lam=None, *, lam_ratio=None, ca_b=50.0, n_modes=None,
-                         tol=1e-4, tension_tol=1e-2, residual_tol=1e-3, max_modes=None, rung_modes=32,
+                         tol=1e-4, tension_tol=1e-2, residual_tol=1e-3, max_modes=None,
+                         rung_modes=32,
                          density_terms=16, max_iter=40, max_time=None):
     """Check the inputs of :func:`solve_vesicle` (ranges and the resource envelope of the module
     docstring) without any BEM work. Returns (nu, lam, lam_c, ca_b, n_modes, tol,
@@ -805,8 +808,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         entrance/exit); or "bend", the curvature density with a curvature-gradient term
         (``equidistributing_density(..., gradient=1)``, concentrates also on the ends of the
         film of a long vesicle, where a cap meets the cylindrical body). "auto" (default):
-        "bend" for a long vesicle (estimated ℓ ≈ ℓc λ/λc > LONG_VESICLE = 5), else "film" for
-        lam/lam_c >= NEAR_CRITICAL (0.9) and "uniform" below. With ``initial`` a curve or a
+        "film" for lam/lam_c >= NEAR_CRITICAL (0.9) unless the vesicle is long (estimated
+        ℓ ≈ ℓc λ/λc > LONG_VESICLE = 5), else "bend". With ``initial`` a curve or a
         VesicleResult, the density is re-built on that shape: re-solving a long vesicle from
         its own result (``initial=result, n_modes=...``) resolves it better than the density
         of the lubrication seed (at (0.6, 1.94), 64 modes: residual 8.2e-4 instead of 2.7e-3).
@@ -817,8 +820,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         (each a ``rung_modes`` solve started from the previous one, the first from
         lubrication); a cold start from the lubrication shape there can drift to a spurious,
         closing film. Default: on when ``initial`` is None, lam/lam_c > NEAR_CRITICAL and the
-        vesicle is not long (a long one, ν ≲ 0.75, is a deep parachute at the first rung but
-        converges from the lubrication shape at its own λ through the mode levels).
+        estimated length is at most RUNG_MAX_LENGTH = 9 R (a longer one, ν ≈ 0.6 near lam_c,
+        is led astray by the rungs and converges from the lubrication shape at its own λ).
     rung_modes : int
         Shape modes of each continuation rung.
     valley : bool, optional
