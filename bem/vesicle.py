@@ -111,10 +111,12 @@ Solver paths, before → after (each remaining one with its reason):
   prolonged Jacobian now serves both (before: plain only).
 * seeds: lubrication → spheroid → capsule, into lubrication at the target → lubrication at
   0.9 λc → spheroid → capsule (above).
-* two fallbacks, each met by the map build: a given initial shape that cannot start at the
+* three fallbacks, each met by the map build: a given initial shape that cannot start at the
   target (its film closes once the volume is re-imposed: (0.98, 0.98 λc) from the 0.95 λc
   shape) is replaced by the solver's own seed; a re-built density that the next level cannot
-  carry ((0.95, 0.2 λc): no positive volume at 24 modes) is dropped for the seed's.
+  carry ((0.95, 0.2 λc): no positive volume at 24 modes) is dropped for the seed's; a seed
+  density the first level cannot carry ((0.85, 0.2 λc), "bend" on the lubrication shape)
+  is replaced by uniform arc length.
 
 Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
 
@@ -972,6 +974,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         disc = vesicle_discretisation(n, order)
         t0 = time.perf_counter()
         kept = None
+        if not levels and np.size(prev.density):
+            kept = prev        # the first level may fall back to uniform arc length (below)
         if rebuild is not None and i == rebuild + 1 and levels:
             # the density re-built on the BEM shape of the level before (it resolves what the
             # seed's density misses, e.g. a long vesicle's rear film neck)
@@ -998,14 +1002,18 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                 break
             # a density re-built on a shape that does not carry it (at (0.95, 0.2 lam_c) the
             # 16-mode level stopped at a 5e-2 step and the 24-mode curve on its density had
-            # no positive volume): the ladder keeps the seed's density
-            log.info("solve_vesicle: re-built density rejected at %d modes (%s); kept", n, exc)
-            prev, consistent = kept, 0
+            # no positive volume): the ladder keeps the seed's density; a first level whose
+            # seed density fails (the "bend" density of the lubrication shape at (0.85, 0.2
+            # lam_c): a curve c_1 cannot close) starts on uniform arc length
+            log.info("solve_vesicle: density rejected at %d modes (%s)", n, exc)
+            prev, consistent = (kept, 0) if levels else \
+                (fit_curve(kept.sample, 0.0, 1.0, n), 0)
             try:
                 st, op, info = _solve_level(nu, lam, ca_b, disc, prev, n, xtol=xtol,
                                             max_iter=max_iter, valley=valley,
-                                            deadline=deadline,
-                                            coarse=(levels[-1][1], levels[-1][0]))
+                                            seed_level=not levels, deadline=deadline,
+                                            coarse=(levels[-1][1], levels[-1][0])
+                                            if levels else None)
             except InvalidParameterError as exc2:
                 message = f"level with {n} modes: {exc2}"
                 break
