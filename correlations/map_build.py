@@ -123,11 +123,14 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     """One BEM point. ``warm``: a VesicleResult or a stored record with a shape (or None).
     Returns (record fields, the object to warm-start the next point from or None)."""
     from bem.shape import SpectralCurve
-    from bem.vesicle import solve_vesicle
+    from bem.vesicle import NEAR_CRITICAL, solve_vesicle
     from lubrication.geometry import critical_confinement
 
-    initial = warm
-    if isinstance(warm, dict):
+    # near lam_c the solver's own continuation (rungs from the lubrication shape) is used, not
+    # the neighbour's shape: continued from its 0.95 lam_c shape, (0.9, 0.98 lam_c, 50) failed
+    # at 80 modes (608 s), while the rungs converge at 72 modes
+    initial = None if lam_ratio > NEAR_CRITICAL else warm
+    if isinstance(initial, dict):
         lam = lam_ratio * float(critical_confinement(nu))
         initial = SpectralCurve.closed(warm["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
                                        density=warm["shape"]["density"])
