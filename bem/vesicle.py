@@ -973,50 +973,43 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             break
         disc = vesicle_discretisation(n, order)
         t0 = time.perf_counter()
-        kept = None
-        if not levels and np.size(prev.density):
-            kept = prev        # the first level may fall back to uniform arc length (below)
+        # the seeds of this level in the order tried: after one whose density the level
+        # rejects, a density re-built on a shape that does not carry it (at (0.95, 0.2 lam_c)
+        # the 16-mode level stopped at a 5e-2 step and the 24-mode curve on its density had no
+        # positive volume) gives way to the seed's density, and a first level whose seed
+        # density fails (the "bend" density of the lubrication shape at (0.85, 0.2 lam_c): a
+        # curve c_1 cannot close) starts on uniform arc length (None: made when needed)
+        seeds = [prev, None] if not levels and np.size(prev.density) else [prev]
         if rebuild is not None and i == rebuild + 1 and levels:
             # the density re-built on the BEM shape of the level before (it resolves what the
             # seed's density misses, e.g. a long vesicle's rear film neck)
-            kept = prev
             try:
-                prev = fit_curve(prev.sample, 0.0, 1.0, n,
-                                 density=_DENSITIES[rebuilt](prev, density_terms))
+                seeds = [fit_curve(prev.sample, 0.0, 1.0, n,
+                                   density=_DENSITIES[rebuilt](prev, density_terms)), prev]
                 consistent = len(levels)
             except InvalidParameterError:
-                kept = None
+                pass
         # a carrier starts from a fresh difference Jacobian: one prolonged from the (unfinished)
         # level below led the cold start of (0.6, 1.94) to Δp⁺ 2829 at 32 modes (1778 converged)
         carrier = rebuild is not None and valley and i < rebuild
-        try:
-            st, op, info = _solve_level(nu, lam, ca_b, disc, prev, n, xtol=xtol,
-                                        max_iter=max_iter, seed_level=not levels,
-                                        valley=valley,
-                                        carrier=carrier, deadline=deadline,
-                                        coarse=(levels[-1][1], levels[-1][0])
-                                        if levels and not carrier else None)
-        except InvalidParameterError as exc:
-            if kept is None:
-                message = f"level with {n} modes: {exc}"
-                break
-            # a density re-built on a shape that does not carry it (at (0.95, 0.2 lam_c) the
-            # 16-mode level stopped at a 5e-2 step and the 24-mode curve on its density had
-            # no positive volume): the ladder keeps the seed's density; a first level whose
-            # seed density fails (the "bend" density of the lubrication shape at (0.85, 0.2
-            # lam_c): a curve c_1 cannot close) starts on uniform arc length
-            log.info("solve_vesicle: density rejected at %d modes (%s)", n, exc)
-            prev, consistent = (kept, 0) if levels else \
-                (fit_curve(kept.sample, 0.0, 1.0, n), 0)
+        st = rejected = None
+        for k, seed in enumerate(seeds):
+            if k:
+                log.info("solve_vesicle: density rejected at %d modes (%s)", n, rejected)
+                consistent = 0
+            as_carrier = carrier and not k
             try:
-                st, op, info = _solve_level(nu, lam, ca_b, disc, prev, n, xtol=xtol,
-                                            max_iter=max_iter, valley=valley,
-                                            seed_level=not levels, deadline=deadline,
-                                            coarse=(levels[-1][1], levels[-1][0])
-                                            if levels else None)
-            except InvalidParameterError as exc2:
-                message = f"level with {n} modes: {exc2}"
+                st, op, info = _solve_level(
+                    nu, lam, ca_b, disc, fit_curve(prev.sample, 0.0, 1.0, n) if seed is None
+                    else seed, n, xtol=xtol, max_iter=max_iter, seed_level=not levels,
+                    valley=valley, carrier=as_carrier, deadline=deadline,
+                    coarse=(levels[-1][1], levels[-1][0]) if levels and not as_carrier else None)
                 break
+            except InvalidParameterError as exc:
+                rejected = exc
+        if st is None:
+            message = f"level with {n} modes: {rejected}"
+            break
         timings[f"modes{n}_s"] = time.perf_counter() - t0
         iterations[f"modes{n}"] = info
         out = _outputs(nu, lam, op, st)
