@@ -4,16 +4,28 @@ Scalings as in :mod:`correlations.solution_map` (ν, λ/λc, Ca_B = ηUR0²/κ, 
 
 Method
 ------
-The grid (:data:`DEFAULT_GRID`, overridable) is cut into *lines* (method, ν, Ca_B); a line's
-points are solved in increasing λ/λc, each started from the last converged point before it (BEM:
-``initial=`` that shape; lubrication: ``initial=`` that result), the direction
-:mod:`bem.sweep` recommends. Every finished point, converged or failed, is written at once as
-its own JSON file (:func:`correlations.solution_map.point_filename`) through
-:func:`lubrication.io.atomic_write`, so a killed build leaves only complete files. A restarted
-build skips the stored points of each line and warm-starts from the last converged *stored*
-shape (BEM: the spectral ``modes`` and ``density`` of the point, rebuilt with
-:meth:`bem.shape.SpectralCurve.closed` at the new volume; lubrication stores no solver state and
-cold-starts, which costs about a second).
+The grid (:data:`DEFAULT_GRID`, overridable) is cut into *lines*, paths through the grid along
+which every solve starts from the previous converged point (:func:`line_tasks`):
+
+* lubrication: (ν, Ca_B) fixed, λ/λc increasing (``initial=`` the previous result), the
+  direction :mod:`bem.sweep` recommends;
+* BEM: (λ/λc, Ca_B) fixed, ν *decreasing* from the nearly spherical 0.98 (``initial=`` the
+  previous shape, rescaled to the new volume). Measured at Ca_B = 50: continued along λ from
+  λ/λc = 0.2, the ν = 0.75 line converged at 2 of its 10 points (the others ended in non-steady
+  least-squares minima, residual 6e-3–1.5e-1, or above the tolerance at 80 modes); started from
+  the converged ν = 0.8 shape at the same λ/λc, (0.75, λ/λc) converged at 0.2, 0.3, 0.6, 0.8 and
+  0.9 in 2–22 s each. Above λ/λc = ``bem.vesicle.NEAR_CRITICAL`` the solver's own continuation
+  (rungs from the lubrication shape) is tried first and the neighbour's shape second: continued
+  from its 0.95 λc shape along λ, (0.9, 0.98 λc) failed at 80 modes (608 s), the rungs converge.
+  Below it the neighbour's shape is tried first and the solver's own seed second. The record's
+  ``seed`` names the start that converged, its ``message`` the reasons of the others.
+
+Every finished point, converged or failed, is written at once as its own JSON file
+(:func:`correlations.solution_map.point_filename`) through :func:`lubrication.io.atomic_write`,
+so a killed build leaves only complete files. A restarted build skips the stored points of each
+line and warm-starts from the last converged *stored* point (BEM: the spectral ``modes`` and
+``density`` of the point, rebuilt with :meth:`bem.shape.SpectralCurve.closed` at the new volume;
+lubrication stores no solver state and cold-starts, which costs about a second).
 
 Lines are independent tasks: by default a local :class:`concurrent.futures.ProcessPoolExecutor`
 (``workers`` processes; ``workers=1`` solves in this process), or a Dask distributed cluster
@@ -23,7 +35,8 @@ point a finished line returns that is not yet on disk.
 
 Resource envelope: a point takes 0.1–3 s (lubrication) to minutes (BEM near λc); ``max_time``
 bounds each point (an expired point is stored as failed with the reason). The default grid has
-9 ν × (10 BEM + 11 lubrication λ/λc) × 4 Ca_B = 756 points in 72 lines.
+9 ν × (10 BEM + 11 lubrication λ/λc) × 4 Ca_B = 756 points in 76 lines (36 lubrication, 40
+BEM).
 """
 
 from __future__ import annotations
@@ -104,13 +117,21 @@ def make_grid(nu=None, lam_ratio=None, ca_b=None, methods=None) -> dict:
             "ca_b": values("ca_b", ca_b, DEFAULT_GRID["ca_b"], 0.0, math.inf)}
 
 
-def line_tasks(grid: dict) -> list[tuple[str, float, float]]:
-    """The lines (method, ν, Ca_B) of a grid in build order: lubrication first (seconds per
-    line), then BEM by Ca_B nearest to 50 (Chen et al.'s value and the red-blood-cell default,
-    so that an interrupted build has the most used slice first), ν from large to small."""
-    lines = [(m, nu, ca) for m in grid["methods"] for nu in grid["nu"] for ca in grid["ca_b"]]
-    return sorted(lines, key=lambda t: (t[0] != "lubrication", abs(math.log(t[2] / 50.0)),
-                                        -t[1]))
+def line_tasks(grid: dict) -> list[tuple[str, float, list[tuple[float, float]]]]:
+    """The lines ``(method, Ca_B, [(ν, λ/λc), ...])`` of a grid, each in solve order (see the
+    module docstring), in build order: lubrication first (seconds per line), then BEM by Ca_B
+    nearest to 50 (Chen et al.'s value and the red-blood-cell default, so that an interrupted
+    build has the most used slice first), λ/λc from small to large."""
+    lines = []
+    for m in grid["methods"]:
+        for ca in grid["ca_b"]:
+            if m == "lubrication":
+                lines += [(m, ca, [(nu, r) for r in grid["lam_ratio"][m]]) for nu in grid["nu"]]
+            else:
+                lines += [(m, ca, [(nu, r) for nu in reversed(grid["nu"])])
+                          for r in grid["lam_ratio"][m]]
+    return sorted(lines, key=lambda t: (t[0] != "lubrication", abs(math.log(t[1] / 50.0)),
+                                        t[2][0][1], -t[2][0][0]))
 
 
 # --------------------------------------------------------------------------- one point
@@ -120,30 +141,44 @@ def _now() -> str:
 
 
 def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
-    """One BEM point. ``warm``: a VesicleResult or a stored record with a shape (or None).
-    Returns (record fields, the object to warm-start the next point from or None)."""
+    """One BEM point. ``warm``: the previous converged point of the line (a dict with ``nu``,
+    ``lam_ratio`` and ``shape``: a stored record or what this function returned), or None.
+    The starts are tried in the order of the module docstring, within ``max_time`` in all.
+    Returns (record fields, the warm start of the next point or None)."""
     from bem.shape import SpectralCurve
     from bem.vesicle import NEAR_CRITICAL, solve_vesicle
     from lubrication.geometry import critical_confinement
 
-    # near lam_c the solver's own continuation (rungs from the lubrication shape) is used, not
-    # the neighbour's shape: continued from its 0.95 lam_c shape, (0.9, 0.98 lam_c, 50) failed
-    # at 80 modes (608 s), while the rungs converge at 72 modes
-    initial = None if lam_ratio > NEAR_CRITICAL else warm
-    if isinstance(initial, dict):
+    starts = [("own", None)]
+    if warm is not None:
         lam = lam_ratio * float(critical_confinement(nu))
-        initial = SpectralCurve.closed(warm["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
-                                       density=warm["shape"]["density"])
-    res = solve_vesicle(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial, max_time=max_time,
-                        **options)
+        curve = SpectralCurve.closed(warm["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
+                                     density=warm["shape"]["density"])
+        label = f"neighbour (nu={warm['nu']:g}, lam/lam_c={warm['lam_ratio']:g})"
+        starts.insert(0 if lam_ratio <= NEAR_CRITICAL else 1, (label, curve))
+    deadline = None if max_time is None else time.monotonic() + max_time
+    failures, bie = [], 0
+    for label, initial in starts:
+        left = None if deadline is None else deadline - time.monotonic()
+        if left is not None and left <= 0:
+            failures.append(f"{label}: not tried, max_time spent")
+            break
+        res = solve_vesicle(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial, max_time=left,
+                            **options)
+        bie += res.bie_solves
+        if res.success:
+            break
+        failures.append(f"{label}: {res.message}")
+    seed = res.seed if initial is None else label
+    message = res.message if res.success else "; ".join(failures)
     d = res.to_dict(shape=False)
     est = res.error_estimate if res.success else {}
     fields = {"lam": d["lam"], "lam_c": d["lam_c"], "success": bool(res.success),
-              "message": res.message, **{q: d.get(q) for q in QUANTITIES},
-              "shape_class": d["shape_class"],
+              "message": message, **{q: d.get(q) for q in QUANTITIES},
+              "shape_class": d["shape_class"], "failed_starts": failures if res.success else [],
               "error_estimate": {q: (None if est.get(q) is None or not math.isfinite(est[q])
                                      else float(est[q])) for q in QUANTITIES},
-              "residual": d["residual"], "bie_solves": res.bie_solves, "seed": res.seed,
+              "residual": d["residual"], "bie_solves": bie, "seed": seed,
               "shape": ({"modes": res.modes.tolist(), "density": res.density.tolist()}
                         if res.success else None),
               "solver": {"name": "bem.vesicle.solve_vesicle", "panels": d["panels"],
@@ -151,7 +186,8 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
                          "refinement_modes": [lev[0] for lev in d["refinement"]],
                          "tol": d["tol"], "residual_tol": d["residual_tol"],
                          "options": options, "max_time": max_time}}
-    return fields, (res if res.success else None)
+    warm_next = {"nu": nu, "lam_ratio": lam_ratio, "shape": fields["shape"]}
+    return fields, (warm_next if res.success else None)
 
 
 def _solve_lubrication(nu, lam_ratio, ca_b, warm, options, max_time):
@@ -216,21 +252,21 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def solve_line(folder, method, nu, ca_b, lam_ratios, stored, options, max_time, provenance,
+def solve_line(folder, method, ca_b, points, stored, options, max_time, provenance,
                parent_pid=None, on_point=None) -> list[dict]:
-    """Solve the missing points of one line (method, ν, Ca_B) in increasing λ/λc.
+    """Solve the missing points of one line (method, Ca_B, [(ν, λ/λc), ...]) in its order.
 
-    ``stored`` maps λ/λc to the records already stored (skipped; a converged BEM one is the
-    warm start of the next). Each new point is written to ``folder`` at once. Stops early if
-    the process's parent is no longer ``parent_pid`` (the build was killed). Returns the new
-    records.
+    ``stored`` maps (ν, λ/λc), rounded to 9 digits, to the records already stored (skipped; a
+    converged BEM one is the warm start of the next). Each new point is written to ``folder``
+    at once. Stops early if the process's parent is no longer ``parent_pid`` (the build was
+    killed). Returns the new records.
     """
     folder = Path(folder)
     warm, new = None, []
-    for r in sorted(lam_ratios):
+    for nu, r in points:
         if parent_pid is not None and os.getppid() != parent_pid:
             break
-        done = stored.get(round(r, 9))
+        done = stored.get((round(nu, 9), round(r, 9)))
         if done is not None:
             if done.get("success"):
                 warm = done if done.get("shape") else None
@@ -369,18 +405,19 @@ def _run(folder, grid, options, workers, client, max_time, retry_failed, progres
     stored: dict = {}
     for p in read_points(folder):
         if p["success"] or not retry_failed:
-            key = (p["method"], round(p["nu"], 9), round(p["ca_b"], 9))
-            stored.setdefault(key, {})[round(p["lam_ratio"], 9)] = p
-    total = sum(len(grid["lam_ratio"][m]) for m, _, _ in line_tasks(grid))
+            key = (p["method"], round(p["ca_b"], 9))
+            stored.setdefault(key, {})[(round(p["nu"], 9), round(p["lam_ratio"], 9))] = p
+    lines = line_tasks(grid)
+    total = sum(len(points) for _, _, points in lines)
     state = {"total": total, "new": 0, "failed": 0, "running": 0, "errors": []}
 
-    jobs = []
-    for method, nu, ca in line_tasks(grid):
-        have = stored.get((method, round(nu, 9), round(ca, 9)), {})
-        ratios = grid["lam_ratio"][method]
-        if any(round(r, 9) not in have for r in ratios):
-            jobs.append((method, nu, ca, ratios, have))
-    done_before = total - sum(sum(1 for r in j[3] if round(r, 9) not in j[4]) for j in jobs)
+    def missing(method, ca, points) -> int:
+        have = stored.get((method, round(ca, 9)), {})
+        return sum((round(nu, 9), round(r, 9)) not in have for nu, r in points)
+
+    jobs = [(m, ca, points, stored.get((m, round(ca, 9)), {})) for m, ca, points in lines
+            if missing(m, ca, points)]
+    done_before = total - sum(missing(m, ca, points) for m, ca, points, _ in jobs)
 
     def report() -> None:
         state["done"] = done_before + state["new"]
@@ -391,7 +428,7 @@ def _run(folder, grid, options, workers, client, max_time, retry_failed, progres
             progress({k: state[k] for k in ("done", "total", "failed", "new", "running",
                                             "eta_s")})
 
-    state["failed"] = sum(1 for line in stored.values() for p in line.values()
+    state["failed"] = sum(1 for by_point in stored.values() for p in by_point.values()
                           if not p["success"])
     report()
 
@@ -403,8 +440,8 @@ def _run(folder, grid, options, workers, client, max_time, retry_failed, progres
     args = (options, max_time, provenance)
     if client is None and (workers or os.cpu_count() or 1) <= 1:
         state["running"] = 1
-        for method, nu, ca, ratios, have in jobs:
-            solve_line(str(folder), method, nu, ca, ratios, have, *args, on_point=on_point)
+        for method, ca, points, have in jobs:
+            solve_line(str(folder), method, ca, points, have, *args, on_point=on_point)
     else:
         _parallel(folder, jobs, args, workers, client, state, report)
     state["running"] = 0
@@ -439,8 +476,8 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
     seen = _point_names(folder)
     pending: dict = {}
     try:
-        pending = {submit(solve_line, str(folder), m, nu, ca, ratios, have, *args,
-                          parent_pid=parent): (m, nu, ca) for m, nu, ca, ratios, have in jobs}
+        pending = {submit(solve_line, str(folder), m, ca, points, have, *args,
+                          parent_pid=parent): (m, ca, points[0]) for m, ca, points, have in jobs}
         while pending:
             time.sleep(0.5)
             finished = [f for f in pending if f.done()]

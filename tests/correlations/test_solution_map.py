@@ -14,7 +14,7 @@ import math
 import pytest
 
 from correlations import map_build
-from correlations.map_build import build_map, make_grid
+from correlations.map_build import build_map, line_tasks, make_grid
 from correlations.solution_map import (POINT_FORMAT, QUANTITIES, load_map, pack_map,
                                        point_filename, query_map, read_points)
 
@@ -191,38 +191,45 @@ CALLS = []
 def _fake_solver(nu, lam_ratio, ca_b, warm, options, max_time):
     """Stands in for a solver: a known smooth answer, a shape, and the warm start it got."""
     CALLS.append((nu, lam_ratio, ca_b, None if warm is None else
-                  (warm["lam_ratio"] if isinstance(warm, dict) else warm)))
-    ok = lam_ratio != 0.5
+                  ((warm["nu"], warm["lam_ratio"]) if isinstance(warm, dict) else warm)))
+    ok = nu != 0.85
     fields = {"success": ok, "message": "ok" if ok else "did not converge",
               **{q: (truth(q, nu, lam_ratio, ca_b) if ok else None) for q in QUANTITIES},
               "shape_class": "bullet" if ok else None,
               "error_estimate": dict.fromkeys(QUANTITIES), "residual": 0.0,
               "bie_solves": 1, "shape": {"modes": [0.1], "density": []} if ok else None}
-    return fields, (lam_ratio if ok else None)
+    return fields, ({"nu": nu, "lam_ratio": lam_ratio} if ok else None)
+
+
+def test_bem_lines_run_along_nu_and_lubrication_lines_along_lam():
+    lines = line_tasks(make_grid([0.8, 0.9], [0.3, 0.95], [50.0, 500.0]))
+    assert lines[0] == ("lubrication", 50.0, [(0.9, 0.3), (0.9, 0.95)])
+    assert ("bem", 50.0, [(0.9, 0.3), (0.8, 0.3)]) in lines
+    assert [t[0] for t in lines] == ["lubrication"] * 4 + ["bem"] * 4
 
 
 def test_resume_solves_only_the_missing_points_and_warm_starts_from_the_stored_shape(
         tmp_path, monkeypatch):
     monkeypatch.setitem(map_build.SOLVERS, "bem", _fake_solver)
-    grid = make_grid([0.9], [0.3, 0.4, 0.5, 0.6], [50.0], ["bem"])
+    grid = make_grid([0.8, 0.85, 0.9, 0.95], [0.3], [50.0], ["bem"])
     CALLS.clear()
     first = build_map(tmp_path, grid, workers=1)
-    assert [c[1] for c in CALLS] == [0.3, 0.4, 0.5, 0.6]
-    assert [c[3] for c in CALLS] == [None, 0.3, 0.4, 0.4]      # warm from last converged
+    assert [c[0] for c in CALLS] == [0.95, 0.9, 0.85, 0.8]           # nu decreasing
+    assert [c[3] for c in CALLS] == [None, (0.95, 0.3), (0.9, 0.3), (0.9, 0.3)]
     assert first["failed"] == 1 and first["missing"] == 0
-    (tmp_path / point_filename("bem", 0.9, 0.6, 50.0)).unlink()
-    (tmp_path / point_filename("bem", 0.9, 0.3, 50.0)).unlink()
-    (tmp_path / ".bem_nu0.9_lr0.4_caB50.json.abc.tmp").write_text("{half")   # a killed write
+    (tmp_path / point_filename("bem", 0.8, 0.3, 50.0)).unlink()
+    (tmp_path / point_filename("bem", 0.95, 0.3, 50.0)).unlink()
+    (tmp_path / ".bem_nu0.9_lr0.3_caB50.json.abc.tmp").write_text("{half")   # a killed write
     CALLS.clear()
     again = build_map(tmp_path, None, workers=1)      # resume: the stored grid
-    assert [c[1] for c in CALLS] == [0.3, 0.6]          # the failed 0.5 is not recomputed
-    # 0.6 warm-starts from the *stored* record of 0.4 (the last converged point on disk)
-    assert CALLS[1][3] == 0.4
+    assert [c[0] for c in CALLS] == [0.95, 0.8]         # the failed 0.85 is not recomputed
+    # 0.8 warm-starts from the *stored* record of 0.9 (the last converged point on disk)
+    assert CALLS[1][3] == (0.9, 0.3)
     assert again["new"] == 2 and again["done"] == 4
     assert not list(tmp_path.glob(".*.tmp"))
     CALLS.clear()
     build_map(tmp_path, None, workers=1, retry_failed=True)
-    assert [c[1] for c in CALLS] == [0.5]
+    assert [c[0] for c in CALLS] == [0.85]
 
 
 def test_a_folder_of_another_grid_is_refused(tmp_path, monkeypatch):
@@ -235,22 +242,23 @@ def test_a_folder_of_another_grid_is_refused(tmp_path, monkeypatch):
 
 @pytest.mark.slow
 def test_a_cheap_bem_line_stores_shapes_and_resumes_from_them(tmp_path):
-    """One real BEM line, nu = 0.98, lam/lam_c = 0.3, 0.4, 8 modes, loose tolerances (about
-    30 s with numba compilation): the shapes are stored, the pack holds the points, and a
-    resumed line warm-starts from the stored shape."""
-    grid = make_grid([0.98], [0.3, 0.4], [50.0], ["bem"])
+    """One real BEM line, lam/lam_c = 0.3, nu = 0.98 then 0.95, 8 modes, loose tolerances
+    (about 30 s with numba compilation): the shapes are stored, the pack holds the points, and a
+    resumed line warm-starts from the stored shape of the larger nu."""
+    grid = make_grid([0.95, 0.98], [0.3], [50.0], ["bem"])
     options = {"bem": {"n_modes": 8, "tol": 5e-2, "residual_tol": 1e-2}}
     summary = build_map(tmp_path, grid, options=options, workers=1)
-    points = {p["lam_ratio"]: p for p in read_points(tmp_path)}
+    points = {p["nu"]: p for p in read_points(tmp_path)}
     assert all(p["success"] for p in points.values()), [p["message"] for p in points.values()]
-    assert points[0.4]["seed"] == "initial" and len(points[0.4]["shape"]["modes"]) == 8
-    assert points[0.3]["error_estimate"]["V_over_U"] is not None
+    neighbour = "neighbour (nu=0.98, lam/lam_c=0.3)"
+    assert points[0.95]["seed"] == neighbour and len(points[0.95]["shape"]["modes"]) == 8
+    assert points[0.98]["error_estimate"]["V_over_U"] is not None
     m = load_map(summary["map"])
-    res = query_map(0.98, 0.4, 50.0, m)
-    assert res["dp_plus_R0"] == pytest.approx(points[0.4]["dp_plus_R0"], rel=1e-12)
+    res = query_map(0.95, 0.3, 50.0, m)
+    assert res["dp_plus_R0"] == pytest.approx(points[0.95]["dp_plus_R0"], rel=1e-12)
     assert res.quantities["dp_plus_R0"].solver_error > 0
-    (tmp_path / point_filename("bem", 0.98, 0.4, 50.0)).unlink()
+    (tmp_path / point_filename("bem", 0.95, 0.3, 50.0)).unlink()
     again = build_map(tmp_path, None, options=options, workers=1)
-    redo = {p["lam_ratio"]: p for p in read_points(tmp_path)}[0.4]
-    assert again["new"] == 1 and redo["success"] and redo["seed"] == "initial"
-    assert redo["dp_plus_R0"] == pytest.approx(points[0.4]["dp_plus_R0"], rel=5e-2)
+    redo = {p["nu"]: p for p in read_points(tmp_path)}[0.95]
+    assert again["new"] == 1 and redo["success"] and redo["seed"] == neighbour
+    assert redo["dp_plus_R0"] == pytest.approx(points[0.95]["dp_plus_R0"], rel=5e-2)

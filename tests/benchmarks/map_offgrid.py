@@ -1,0 +1,145 @@
+"""The solution map against direct solves at off-grid points: interpolation error and error-bar
+coverage.
+
+Run with ``python tests/benchmarks/map_offgrid.py [--map FILE] [--json FILE] [--points N]``.
+The points are a fixed pseudo-random sample (seed 2026) of (ν, λ/λc, Ca_B) inside the map's
+box, ν in [0.6, 0.98], λ/λc in [0.2, 0.95], log-uniform Ca_B in [5, 500] (or the Ca_B values
+given with ``--ca-b``), none on a grid node (each coordinate at least 0.2 of a grid step from
+the nearest node). Each is solved directly by the BEM at its default options (Ca_B given), the
+way the map's own points were solved, and compared with :func:`query_map` at the same point.
+
+Acceptance targets (relative, |map − direct| / |direct|): V/U 0.2 %, Δp⁺ and ℓ 2 %, minimum
+film 5 %; the reported error bar ``error`` should cover |map − direct| at ≥ 90 % of points.
+Direct solves that do not converge, and map queries that return None (next to a hole), are
+listed and left out of the statistics. Results are stored point by point in the JSON file
+(atomic writes; a rerun skips the points already solved with the same map). Not a test: a
+BEM solve takes 3–60 s per point on 2 cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import random
+import sys
+import time
+from pathlib import Path
+
+from bem.vesicle import solve_vesicle
+from correlations.map_build import DEFAULT_GRID
+from correlations.solution_map import load_map, query_map
+from lubrication.io import atomic_write
+
+TARGETS = {"V_over_U": 2e-3, "dp_plus_R0": 2e-2, "ell": 2e-2, "film_min": 5e-2}
+COVERAGE_TARGET = 0.9
+
+
+def _off(value: float, nodes: list[float], log: bool = False) -> bool:
+    """True if ``value`` is at least 0.2 of the local grid step from every node."""
+    f = math.log if log else (lambda v: v)
+    xs = sorted(f(n) for n in nodes)
+    x = f(value)
+    i = min(range(len(xs)), key=lambda k: abs(xs[k] - x))
+    step = min(abs(xs[j] - xs[i]) for j in (i - 1, i + 1) if 0 <= j < len(xs))
+    return abs(x - xs[i]) >= 0.2 * step
+
+
+def sample(n: int, ca_b: list[float] | None = None, seed: int = 2026) -> list[tuple]:
+    """``n`` off-grid points (ν, λ/λc, Ca_B) of the default grid's BEM box."""
+    rng, out = random.Random(seed), []
+    grid_r = DEFAULT_GRID["lam_ratio"]["bem"]
+    while len(out) < n:
+        nu = round(rng.uniform(0.6, 0.98), 4)
+        r = round(rng.uniform(0.2, 0.95), 4)
+        ca = (rng.choice(ca_b) if ca_b else
+              round(math.exp(rng.uniform(math.log(5.0), math.log(500.0))), 2))
+        if (_off(nu, DEFAULT_GRID["nu"]) and _off(r, grid_r)
+                and (ca_b or _off(ca, DEFAULT_GRID["ca_b"], log=True))):
+            out.append((nu, r, ca))
+    return out
+
+
+def _direct(nu: float, r: float, ca: float) -> dict:
+    t0 = time.perf_counter()
+    res = solve_vesicle(nu, lam_ratio=r, ca_b=ca)
+    d = res.to_dict(shape=False)
+    return {"success": bool(res.success), "message": res.message,
+            "seconds": round(time.perf_counter() - t0, 1), "bie_solves": res.bie_solves,
+            **{q: d.get(q) for q in TARGETS}}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--map", help="packed map file (default: the shipped map)")
+    ap.add_argument("--json", default="docs/data/map_offgrid.json", help="results file")
+    ap.add_argument("--points", type=int, default=24, help="number of points (default 24)")
+    ap.add_argument("--ca-b", type=float, nargs="+", help="Ca_B values to sample from "
+                    "(default: log-uniform in [5, 500])")
+    args = ap.parse_args(argv)
+    if args.points < 1:
+        ap.error(f"--points must be >= 1, got {args.points}")
+    out_path = Path(args.json)
+    if not out_path.parent.is_dir():
+        ap.error(f"--json: folder {out_path.parent} does not exist")
+    m = load_map(args.map)
+    source = str(args.map or "shipped map")
+    old = json.loads(out_path.read_text()) if out_path.exists() else {}
+    done = {tuple(p["point"]): p for p in old.get("points", [])}
+    rows = []
+    print(f"{'nu':>6} {'r':>6} {'Ca_B':>7} {'s':>5}  " + "  ".join(
+        f"{q:>10} {'rel err':>8} {'bar':>8}" for q in TARGETS), flush=True)
+    for point in sample(args.points, args.ca_b):
+        row = done.get(point)
+        if row is None or row["direct"] is None:
+            row = {"point": list(point), "direct": _direct(*point)}
+        query = query_map(*point, map=m)
+        row["map"] = {q: {"value": query.quantities[q].value, "error": query.quantities[q].error,
+                          "note": query.quantities[q].note} for q in TARGETS}
+        rows.append(row)
+        atomic_write(out_path, lambda f: json.dump(
+            {"map": source, "targets": TARGETS, "points": rows}, f, indent=1))
+        d = row["direct"]
+        cells = []
+        for q in TARGETS:
+            mv, dv = row["map"][q]["value"], d[q]
+            if not d["success"] or mv is None or dv is None:
+                cells.append(f"{'—':>10} {'':>8} {'':>8}")
+                continue
+            cells.append(f"{mv:10.5g} {abs(mv - dv) / abs(dv):8.1e} "
+                         f"{(row['map'][q]['error'] or 0) / abs(dv):8.1e}")
+        print(f"{point[0]:6.4f} {point[1]:6.4f} {point[2]:7.2f} {d['seconds']:5.0f}  "
+              + "  ".join(cells) + ("" if d["success"] else "  direct: not converged"),
+              flush=True)
+    print()
+    print(f"{'quantity':>11} {'points':>6} {'max rel err':>11} {'target':>7} {'covered':>8}")
+    status = 0
+    for q, target in TARGETS.items():
+        errs, cover = [], []
+        for row in rows:
+            mv, d = row["map"][q], row["direct"]
+            if d["success"] and mv["value"] is not None and d[q] is not None:
+                e = abs(mv["value"] - d[q])
+                errs.append(e / abs(d[q]))
+                cover.append(mv["error"] is not None and mv["error"] >= e)
+        if not errs:
+            print(f"{q:>11} {0:6d} {'—':>11}")
+            continue
+        frac = sum(cover) / len(cover)
+        ok = max(errs) <= target and frac >= COVERAGE_TARGET
+        status |= not ok
+        print(f"{q:>11} {len(errs):6d} {max(errs):11.2e} {target:7.0e} {frac:8.0%}"
+              + ("" if ok else "  MISSED"))
+    left = [r["point"] for r in rows if not r["direct"]["success"]]
+    holes = [r["point"] for r in rows if r["direct"]["success"]
+             and r["map"]["V_over_U"]["value"] is None]
+    print(f"direct solve not converged: {left or 'none'}")
+    print(f"map gives no value (hole or outside): {holes or 'none'}")
+    return status
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:
+        sys.exit(130)

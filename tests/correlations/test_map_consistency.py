@@ -1,0 +1,83 @@
+"""The solution map's own consistency, on the committed build folder (the points the shipped map
+is packed from): trends along λ, BEM against lubrication in their overlap, the small-λ limit.
+
+Scalings as in :mod:`correlations.solution_map` (V/U, Δp⁺R0/(ηU), lengths in R).
+"""
+
+from __future__ import annotations
+
+import collections
+from pathlib import Path
+
+import pytest
+
+from correlations.solution_map import read_points
+from lubrication import asymptotics
+
+BUILD = Path(__file__).resolve().parents[2] / "correlations" / "data" / "solution_map_build"
+
+
+@pytest.fixture(scope="module")
+def points():
+    if not BUILD.is_dir():
+        pytest.skip(f"no map build folder at {BUILD}")
+    return {(p["method"], p["nu"], p["lam_ratio"], p["ca_b"]): p
+            for p in read_points(BUILD) if p["success"]}
+
+
+def _lines(points):
+    lines = collections.defaultdict(list)
+    for (method, nu, r, ca), p in sorted(points.items()):
+        lines[(method, nu, ca)].append(p)
+    return lines
+
+
+@pytest.mark.parametrize("q, sign", [("V_over_U", -1), ("dp_plus_R0", 1), ("film_min", -1),
+                                     ("ell", 1)])
+def test_every_line_is_monotone_in_lam(points, q, sign):
+    """Trend (Chen et al. 2020 figs. vel, dpa, film, L): a larger vesicle in the same tube is
+    slower relative to U, costs more pressure, leaves a thinner film and is longer. Holds for
+    every converged point of both methods, so a point on a wrong branch breaks it."""
+    checked = 0
+    for key, line in _lines(points).items():
+        values = [p[q] for p in line]
+        for p, a, b in zip(line[1:], values, values[1:]):
+            assert sign * (b - a) > 0, (key, p["lam_ratio"], a, b)
+            checked += 1
+    assert checked >= 300
+
+
+def test_bem_and_lubrication_approach_each_other_toward_lam_c(points):
+    """Lubrication is the δ → 0 limit of the Stokes solution (Secomb et al. 1986; Barakat &
+    Shaqfeh 2018b): in the overlap λ/λc = 0.9, 0.95, 0.98 the BEM–lubrication gap in Δp⁺ and in
+    the film must shrink toward λc, and V/U and ℓ, which are set by the volume and area to
+    leading order, must agree to 0.5 %."""
+    overlap, lines = (0.9, 0.95, 0.98), 0
+    for (method, nu, ca), line in _lines(points).items():
+        if method != "bem":
+            continue
+        pairs = [(points.get(("bem", nu, r, ca)), points.get(("lubrication", nu, r, ca)))
+                 for r in overlap]
+        pairs = [(b, lub) for b, lub in pairs if b and lub]
+        if len(pairs) < 2:
+            continue
+        lines += 1
+        gap = {q: [abs(lub[q] - b[q]) / abs(b[q]) for b, lub in pairs]
+               for q in ("V_over_U", "ell", "dp_plus_R0", "film_min")}
+        assert max(gap["V_over_U"]) < 5e-3 and max(gap["ell"]) < 5e-3, (nu, ca, gap)
+        for q in ("dp_plus_R0", "film_min"):
+            assert all(b < a for a, b in zip(gap[q], gap[q][1:])), (nu, ca, q, gap[q])
+    assert lines >= 5
+
+
+@pytest.mark.parametrize("nu", [0.98, 0.95])
+def test_small_lam_limit_is_the_rigid_sphere(points, nu):
+    """At λ/λc = 0.2 a nearly spherical vesicle at Ca_B = 50 moves like a small rigid sphere
+    on the axis: V/U and Δp⁺ within 1 % of Chen et al. 2020 eqs. small1 and small2 (Faxén/
+    Haberman–Sayre), the agreement Chen et al. report for λ < 0.5 and nearly spherical
+    vesicles. Independent of the BEM: closed forms."""
+    p = points.get(("bem", nu, 0.2, 50.0))
+    assert p is not None, "the map has no BEM point at λ/λc = 0.2, Ca_B = 50"
+    assert p["V_over_U"] == pytest.approx(asymptotics.speed_small_sphere(p["lam"]), rel=1e-2)
+    assert p["dp_plus_R0"] == pytest.approx(asymptotics.dp_plus_small_sphere(p["lam"]),
+                                            rel=1e-2)
