@@ -79,6 +79,36 @@ def cmd_map_build(args):
     return out, format_rows(rows, f"Solution map build in {args.out}")
 
 
+def coverage(data: dict) -> str:
+    """The packed map's coverage as text: per Ca_B a ν × λ/λc table with B (BEM point),
+    L (lubrication point only) or . (hole), then every hole where no method converged, with
+    its reasons."""
+    cols, grid = data["columns"], data["grid"]
+    have = {(m, nu, r, ca) for m, nu, r, ca in zip(cols["method"], cols["nu"],
+                                                   cols["lam_ratio"], cols["ca_b"])}
+    ratios = sorted({r for rs in grid["lam_ratio"].values() for r in rs})
+    reasons: dict = {}
+    for h in data["holes"]:
+        reasons.setdefault((h["nu"], h["lam_ratio"], h["ca_b"]), []).append(
+            f"{h['method']}: {h['reason']}")
+    lines, holes = [], []
+    for ca in grid["ca_b"]:
+        lines.append(f"Ca_B = {ca:g}   (B: BEM, L: lubrication, .: hole)")
+        lines.append("  nu \\ lam/lam_c " + "".join(f"{r:<6g}" for r in ratios))
+        for nu in reversed(grid["nu"]):
+            cells = []
+            for r in ratios:
+                cell = ("B" if ("bem", nu, r, ca) in have else
+                        "L" if ("lubrication", nu, r, ca) in have else ".")
+                if cell == "." and any(r in grid["lam_ratio"][m] for m in grid["methods"]):
+                    holes.append(f"  (nu={nu:g}, lam/lam_c={r:g}, Ca_B={ca:g}): "
+                                 + "; ".join(reasons.get((nu, r, ca), ["not computed"])))
+                cells.append(f"{cell:<6}")
+            lines.append(f"  {nu:<16g}" + "".join(cells))
+    lines.append(f"holes (no method converged): {len(holes)}")
+    return "\n".join(lines + holes)
+
+
 def cmd_map_pack(args):
     from pathlib import Path
 
@@ -105,7 +135,7 @@ def cmd_map_pack(args):
            "bytes": path.stat().st_size}
     from lubrication.cli_contract import format_rows
     rows = [(k, out[k], "", "", "") for k in ("map", "points", "holes", "bytes")]
-    return out, format_rows(rows, f"Packed {args.folder}")
+    return out, format_rows(rows, f"Packed {args.folder}") + "\n\n" + coverage(data)
 
 
 def cmd_map_query(args):

@@ -226,3 +226,17 @@ def test_dask_process_cluster_builds_the_tiny_lubrication_map_like_the_serial_bu
     assert a["nu"] == b["nu"] and a["lam_ratio"] == b["lam_ratio"]
     for q in ("V_over_U", "dp_plus_R0", "film_min", "tension_max"):
         assert b[q] == pytest.approx(a[q], rel=1e-5), q      # solver tolerance 1e-5
+
+
+def test_pack_prints_the_coverage_and_lists_the_holes(cli, tmp_path):
+    """The text summary shows, per Ca_B, which method holds each node, and names each hole."""
+    from test_solution_map import BEM_RATIOS, CAS, NUS
+    hole = (NUS[0], BEM_RATIOS[0], CAS[0])
+    _fake_build(tmp_path / "b", hole=hole)
+    code, out, err = cli("map", "pack", str(tmp_path / "b"), "--out", str(tmp_path / "m.json"))
+    assert code == 0, err
+    assert out.count("Ca_B = ") == len(CAS)
+    assert "holes (no method converged): 1" in out
+    assert f"(nu={hole[0]:g}, lam/lam_c={hole[1]:g}, Ca_B={hole[2]:g}): bem: " in out
+    row = next(line for line in out.splitlines() if line.startswith(f"  {hole[0]:<16g}"))
+    assert row.split()[1:3] == [".", "B"]       # the hole, then its BEM neighbour
