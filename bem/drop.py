@@ -82,7 +82,7 @@ import scipy.linalg as sla
 from lubrication.checks import Deadline, InvalidParameterError, check_positive, check_range
 
 from .assembly import poiseuille
-from .geometry import graded_breaks, wall_half_length
+from .geometry import graded_breaks, tube_panels, wall_half_length
 from .newton import levenberg_marquardt
 from .quadrature import (
     DEFAULT_ORDER,
@@ -142,29 +142,17 @@ def _drop_breaks(curve: SpectralCurve, n_panels: int) -> np.ndarray:
 
 
 def _wall_and_inlet(curve: SpectralCurve, disc: DropDiscretisation, p: int):
-    """Wall and inlet panels for the drop ``curve`` (fixed during one Newton solve).
+    """Wall and inlet panels for the drop ``curve`` (fixed during one Newton solve), with the
+    half-length of the meshed tube.
 
-    Wall panel length h0 = clip(sqrt(gap)/2, 0.03, 0.5) / (n_panels/8 * wall_refinement) over
-    the drop's extent (plus 0.2 R), growing like 0.5 |x - x_edge| / refinement beyond it.
+    :func:`bem.geometry.tube_panels` with the refinement n_panels/8 * wall_refinement (at least
+    0.5 wall_refinement): the finest wall panels over the drop's extent plus 0.2 R.
     """
     xr, xf = curve.extent()
-    gap = max(1.0 - curve.max_radius(), 1e-3)
-    refinement = max(disc.n_panels / 8.0, 0.5) * disc.wall_refinement
-    h0 = min(0.5, max(0.03, 0.5 * math.sqrt(gap))) / refinement
-    kappa = 0.5 / refinement
-    lo_flat, hi_flat = xr - 0.2, xf + 0.2
     half = wall_half_length(max(-xr, xf), disc.tube_tol)
-
-    def size(x):
-        return h0 + kappa * np.maximum(0.0, np.maximum(lo_flat - x, x - hi_flat))
-
-    br = graded_breaks(-half, half, size, n_min=2)
-    wall = panels_on_curve(lambda x: (x, np.ones_like(x), np.ones_like(x), np.zeros_like(x)),
-                           br, p)
-    n_in = max(2, math.ceil(3 * refinement))
-    brd = graded_breaks(0.0, 1.0, lambda r: 0.15 + 0.85 * (1.0 - r) + 1e-3, n_min=n_in)
-    inlet = panels_on_curve(lambda r: (np.full_like(r, -half), r, np.zeros_like(r),
-                                       np.ones_like(r)), brd, p)
+    wall, inlet = tube_panels(gap=1.0 - curve.max_radius(), half_length=half,
+                              refinement=max(disc.n_panels / 8.0, 0.5) * disc.wall_refinement,
+                              flat=(xr - 0.2, xf + 0.2), p=p)
     return wall, inlet, half
 
 

@@ -31,6 +31,7 @@ __all__ = [
     "sphere_curve",
     "sphere_in_tube",
     "tube_geometry",
+    "tube_panels",
     "wall_half_length",
 ]
 
@@ -94,26 +95,42 @@ class TubeGeometry:
                 "inlet": self.inlet.n_panels, "order": self.body.order}
 
 
-def tube_geometry(body: PanelSet, *, body_extent: float, gap: float, half_length: float,
-                  refinement: float = 1.0, p: int = DEFAULT_ORDER) -> TubeGeometry:
-    """Wall and inlet panels for a body of half-extent ``body_extent`` and wall gap ``gap``.
+def tube_panels(*, gap: float, half_length: float, refinement: float = 1.0,
+                flat: tuple[float, float] = (0.0, 0.0),
+                p: int = DEFAULT_ORDER) -> tuple[PanelSet, PanelSet]:
+    """Panels of the wall r = 1, -half_length <= x <= half_length, and of the inlet disc
+    x = -half_length, for a body leaving the wall gap ``gap``.
 
-    Wall panel length h(x) = h0 + kappa |x| with h0 = clip(sqrt(gap)/2, 0.03, 0.5)/refinement
-    (the lubrication length sqrt(gap a) sets the scale of wall tractions near the body) and
-    kappa = 0.5/refinement; the inlet disc has max(2, 3 refinement) panels graded toward the
-    corner with the wall.
+    Wall panel length h(x) = h0 + kappa d(x), with d(x) the distance from x to the interval
+    ``flat`` = (x_lo, x_hi) (0 inside it), h0 = clip(sqrt(gap)/2, 0.03, 0.5)/refinement (the
+    lubrication length sqrt(gap a) sets the scale of wall tractions near the body) and kappa =
+    0.5/refinement; the inlet disc has max(2, 3 refinement) panels graded toward the corner
+    with the wall. Returns (wall, inlet).
     """
     refinement = float(check_positive("refinement", refinement))
-    half_length = float(check_range("half_length", half_length, body_extent, lo_open=True))
     h0 = min(0.5, max(0.03, 0.5 * math.sqrt(max(gap, 0.0)))) / refinement
     kappa = 0.5 / refinement
-    br = graded_breaks(-half_length, half_length, lambda x: h0 + kappa * np.abs(x), n_min=2)
+    lo, hi = flat
+
+    def size(x):
+        return h0 + kappa * np.maximum(0.0, np.maximum(lo - x, x - hi))
+
+    br = graded_breaks(-half_length, half_length, size, n_min=2)
     wall = panels_on_curve(lambda x: (x, np.ones_like(x), np.ones_like(x), np.zeros_like(x)),
                            br, p)
     n_in = max(2, math.ceil(3 * refinement))
     brd = graded_breaks(0.0, 1.0, lambda r: 0.15 + 0.85 * (1.0 - r) + 1e-3, n_min=n_in)
     inlet = panels_on_curve(lambda r: (np.full_like(r, -half_length), r, np.zeros_like(r),
                                        np.ones_like(r)), brd, p)
+    return wall, inlet
+
+
+def tube_geometry(body: PanelSet, *, body_extent: float, gap: float, half_length: float,
+                  refinement: float = 1.0, p: int = DEFAULT_ORDER) -> TubeGeometry:
+    """Wall and inlet panels (:func:`tube_panels`, graded from x = 0) for a body of half-extent
+    ``body_extent`` and wall gap ``gap``."""
+    half_length = float(check_range("half_length", half_length, body_extent, lo_open=True))
+    wall, inlet = tube_panels(gap=gap, half_length=half_length, refinement=refinement, p=p)
     return TubeGeometry(body=body, wall=wall, inlet=inlet, x_in=-half_length,
                         x_out=half_length, body_extent=float(body_extent))
 
