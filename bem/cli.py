@@ -25,6 +25,8 @@ import logging
 import math
 import sys
 
+from lubrication.io import clean_json
+
 __all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere", "cmd_bem_vesicle",
            "cmd_bem_vesicle_sweep"]
 
@@ -58,7 +60,7 @@ def cmd_bem_sphere(args):
     out["converged"] = ok
     errors = {"V_over_U": res.V_over_U_err, "dp_plus_R": res.dp_plus_R_err,
               "dp_plus_R0": res.dp_plus_R_err * res.lam, "drag_K": res.drag_K_err}
-    out["error_estimate"] = {k: (v if math.isfinite(v) else None) for k, v in errors.items()}
+    out["error_estimate"] = clean_json(errors)
     for key in ("V_over_U_err", "dp_plus_R_err", "drag_K_err"):
         out.pop(key, None)
     method = f"BEM, {res.panels['body']} panels x {res.panels['order']} nodes"

@@ -1,7 +1,8 @@
 """Result of a BEM computation: a frozen dataclass with inputs, outputs, accuracy and provenance.
 
 Saved as JSON through a temporary file in the target directory and :func:`os.replace`, so an
-interrupted run never leaves a half-written file.
+interrupted run never leaves a half-written file; non-finite numbers are written as null and
+the provenance is that of :func:`lubrication.io.provenance` (:mod:`lubrication.io`).
 
 Output hygiene: a result that did not converge keeps its best numbers as attributes (for
 diagnosis in Python), but every *output* of it -- :meth:`to_dict`, the JSON and CSV files of
@@ -13,31 +14,16 @@ diagnostics (residuals, error estimates of the refinement pair, timings) are kep
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
-import platform
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from lubrication.io import atomic_write, save_result
+from lubrication.io import clean_json, provenance, save_result, write_json
 
 __all__ = ["DROP_PROFILE_COLUMNS", "VESICLE_PROFILE_COLUMNS", "DropResult", "SphereResult",
-           "VesicleResult", "provenance"]
-
-
-def provenance() -> dict:
-    """Versions of Python, the package and its numerical dependencies."""
-    from importlib import metadata
-
-    out = {"python": platform.python_version()}
-    for name in ("vesicle-tube", "numpy", "scipy", "numba"):
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:       # pragma: no cover - not installed
-            out[name] = "unknown"
-    return out
+           "VesicleResult"]
 
 
 @dataclass(frozen=True)
@@ -99,15 +85,7 @@ class SphereResult:
     def to_dict(self) -> dict:
         """Plain dict of JSON-compatible values (non-finite floats become None; the physical
         outputs are None when the result did not converge)."""
-        def clean(v):
-            if isinstance(v, float) and not math.isfinite(v):
-                return None
-            if isinstance(v, dict):
-                return {k: clean(x) for k, x in v.items()}
-            if hasattr(v, "item"):
-                return clean(v.item())
-            return v
-        out = {k: clean(v) for k, v in dataclasses.asdict(self).items()}
+        out = clean_json(dataclasses.asdict(self))
         if not self.converged:
             out.update(dict.fromkeys(self.PHYSICAL))
         return out
@@ -117,8 +95,7 @@ class SphereResult:
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
         name = name or f"bem_sphere_lam{self.lam:.6g}"
-        return atomic_write(directory / f"{name}.json",
-                            lambda fh: json.dump(self.to_dict(), fh, indent=2, sort_keys=True))
+        return write_json(directory / f"{name}.json", self.to_dict())
 
 
 # Columns of the CSV written by DropResult.save, with their units.
@@ -130,19 +107,6 @@ DROP_PROFILE_COLUMNS = (
     ("kappa1", "meridional curvature, positive for a sphere [1/R]"),
     ("kappa2", "azimuthal curvature, positive for a sphere [1/R]"),
 )
-
-
-def _clean(v):
-    """JSON-compatible value: numpy -> Python, non-finite floats -> None, arrays -> lists."""
-    if isinstance(v, dict):
-        return {k: _clean(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_clean(x) for x in v]
-    if hasattr(v, "tolist"):
-        return _clean(v.tolist())
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    return v
 
 
 @dataclass(frozen=True, eq=False)      # eq=False: arrays have no truth value
@@ -253,14 +217,13 @@ class DropResult:
 
         With ``shape`` the profile arrays x, r and the modes are included as lists.
         """
-        out = {k: _clean(getattr(self, k)) for k in self._SCALARS}
+        out = {k: clean_json(getattr(self, k)) for k in self._SCALARS}
         out["converged"] = bool(self.success)
         if not self.success:
             out.update(dict.fromkeys(self.PHYSICAL))
         if shape:
-            out["shape"] = ({"x": _clean(self.x), "r": _clean(self.r),
-                             "modes": _clean(self.modes), "density": _clean(self.density)}
-                            if self.success else None)
+            out["shape"] = (clean_json({"x": self.x, "r": self.r, "modes": self.modes,
+                                        "density": self.density}) if self.success else None)
         return out
 
     def save(self, directory, stem: str | None = None) -> tuple[Path, Path]:
@@ -422,18 +385,19 @@ class VesicleResult:
 
         With ``shape`` the profiles x, r, tension and the spectral coefficients are included.
         """
-        out = {k: _clean(getattr(self, k)) for k in self._SCALARS}
+        out = {k: clean_json(getattr(self, k)) for k in self._SCALARS}
         out["converged"] = bool(self.success)
-        out["lam_ratio"] = _clean(self.lam_ratio)
+        out["lam_ratio"] = clean_json(self.lam_ratio)
         out["bie_solves"] = self.bie_solves
         if not self.success:
             out.update(dict.fromkeys(self.PHYSICAL))
-            out["refinement"] = [[_clean(level[0]), _clean(level[1]), None, None, None]
+            out["refinement"] = [[clean_json(level[0]), clean_json(level[1]), None, None, None]
                                  for level in self.refinement]
         if shape:
-            out["shape"] = ({k: _clean(getattr(self, k)) for k in
-                             ("x", "r", "tension", "modes", "density", "tension_modes",
-                              "wall_x", "wall_shear")} if self.success else None)
+            out["shape"] = (clean_json({k: getattr(self, k) for k in
+                                        ("x", "r", "tension", "modes", "density",
+                                         "tension_modes", "wall_x", "wall_shear")})
+                            if self.success else None)
         return out
 
     def save(self, directory, stem: str | None = None) -> tuple[Path, Path]:

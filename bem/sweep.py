@@ -39,9 +39,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import json
 import logging
-import math
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -49,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from lubrication.checks import Deadline, InvalidParameterError, as_finite
-from lubrication.io import atomic_write
+from lubrication.io import atomic_write, clean_json, write_json
 
 __all__ = ["MAX_POINTS", "SWEEP_COLUMNS", "save_sweep", "sweep_table", "sweep_vesicle"]
 
@@ -215,11 +213,7 @@ def _cell(res, key: str):
         value = res.timings.get("total_s")
     else:
         value = getattr(res, key)
-    if hasattr(value, "item"):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+    return clean_json(value)
 
 
 def sweep_table(results) -> list[dict]:
@@ -277,7 +271,5 @@ def save_sweep(directory, results, parameters: dict | None = None, *,
             "lams": [float(r.lam) for r in results], "parameters": dict(parameters or {}),
             "columns": [list(c) for c in SWEEP_COLUMNS], "points": table,
             "profile_files": [p.name for p in extra], "provenance": r0.provenance}
-    paths.append(atomic_write(directory / f"{stem}.json",
-                              lambda f: json.dump(data, f, indent=2, sort_keys=True,
-                                                  allow_nan=False)))
+    paths.append(write_json(directory / f"{stem}.json", data))
     return paths + extra

@@ -25,6 +25,7 @@ from pathlib import Path
 from lubrication.checks import InvalidParameterError, check_positive
 from lubrication.cli_contract import (UsageError, add_max_time_option, finite_float, format_rows,
                                       format_value, positive_int)
+from lubrication.io import atomic_write, clean_json
 
 #: Option names of the inputs, for the messages of the library's checks.
 OPTION_NAMES = {"nu": "--nu", "lam": "--lam", "lam_ratio": "--lam-ratio", "ca_b": "--ca-b"}
@@ -232,7 +233,7 @@ def _sweep(args):
                f"{len(failed)} of {len(results)} points did not converge; at the lowest of them, "
                f"lam/lam_c = {first.lam_ratio:.6g}: {first.message}")
     out = {"command": "lubrication", "sweep": True, "nu": r0.nu, "lam_c": r0.lam_c,
-           "ca_b": None if math.isinf(r0.ca_b) else r0.ca_b, "model": r0.model,
+           "ca_b": clean_json(r0.ca_b), "model": r0.model,
            "converged": converged, "message": message, "n_points": len(results),
            "n_converged": n_ok, "max_time": max_time,
            "lowest_converged_lam_ratio": min((r.lam_ratio for r in results if r.success),
@@ -280,14 +281,11 @@ def _column(res, key):
     value = getattr(res, key)
     if key not in ("lam_ratio", "lam", "delta", "message") and not res.success:
         return None             # no physical numbers from a failed solve
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+    return clean_json(value)
 
 
 def _write_sweep_csv(directory: Path, results, table) -> Path:
     """One row per point, written atomically (temporary file, then rename)."""
-    from .io import atomic_write
     directory.mkdir(parents=True, exist_ok=True)
     r0 = results[0]
     path = directory / f"lubrication_sweep_nu{r0.nu:.4g}_{r0.model}" \

@@ -1,18 +1,39 @@
-"""Atomic file output shared by every result writer of the project.
+"""Result output shared by every writer of the project: atomic files, strict JSON, provenance.
 
 A result file is written to a temporary file in the target directory and renamed over the target
 (:func:`os.replace` is atomic on POSIX), so an interrupted run never leaves a half-written file.
+
+Non-finite numbers (the one policy of every result file): JSON has no NaN or infinity, so
+:func:`clean_json` writes them as ``null`` (Python None), and a CSV cell holding one is left
+empty. A non-finite number in a result is either missing (the physical outputs of a failed
+solve, an error estimate without a refinement pair) or an infinite parameter whose meaning is
+stated beside it (``"ca_b": null`` with ``"model": "high-Ca"``). ``null`` rather than strings
+such as ``"NaN"`` or ``"Infinity"``: every strict JSON reader (Python with ``allow_nan=False``,
+JavaScript, jq) accepts it, a numeric field stays numeric-or-missing (a string would make every
+reader special-case the field, and pandas read the column as text), and the difference between
+NaN and infinity is carried by the fields beside it (``converged``, ``message``, ``model``). The
+files are then written with ``allow_nan=False``, so that a value this cleaning misses is an
+error, never an invalid file.
+
+Provenance (:func:`provenance`): the versions of the package and of its numerical
+dependencies, the git commit of the source tree and the date, recorded in every result.
 """
 
 from __future__ import annotations
 
 import csv
+import datetime
+import functools
 import json
+import math
 import os
+import platform
+import subprocess
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write", "save_result", "written_files", "forget_written_files"]
+__all__ = ["atomic_write", "clean_json", "forget_written_files", "provenance", "save_result",
+           "write_json", "written_files"]
 
 # Every file completed by atomic_write in this process, in order: the command line names them
 # after a run, and after an interrupt (each of them is complete).
@@ -62,24 +83,99 @@ def atomic_write(path, write, *, binary: bool = False) -> Path:
     return path
 
 
+def clean_json(value):
+    """``value`` as strict-JSON data: NaN and +-inf -> None (the policy of the module docstring).
+
+    numpy scalars and arrays become Python numbers and (nested) lists, tuples become lists,
+    dicts and lists are cleaned item by item; anything else is returned unchanged.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> clean_json({"V": np.float64(1.5), "ca_b": float("inf"), "ok": np.bool_(True),
+    ...             "x": np.array([1.0, np.nan]), "n": (np.int64(3), -float("inf"))})
+    {'V': 1.5, 'ca_b': None, 'ok': True, 'x': [1.0, None], 'n': [3, None]}
+    """
+    if isinstance(value, dict):
+        return {k: clean_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [clean_json(v) for v in value]
+    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
+        return clean_json(value.tolist())          # numpy scalar or array
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def write_json(path, data, *, indent: int = 2, sort_keys: bool = True) -> Path:
+    """Write ``clean_json(data)`` as strict JSON to ``path`` atomically; returns the path."""
+    data = clean_json(data)
+    return atomic_write(path, lambda f: json.dump(data, f, indent=indent, sort_keys=sort_keys,
+                                                  allow_nan=False))
+
+
+def _csv_cell(value) -> str:
+    """A number for a CSV cell: ``repr`` (round-trip exact), empty if not finite."""
+    value = float(value)
+    return repr(value) if math.isfinite(value) else ""
+
+
 def save_result(directory, stem: str, data: dict, columns, profiles) -> tuple[Path, Path]:
     """Write ``<stem>.json`` (``data`` plus the column legend) and ``<stem>.csv`` (profiles).
 
     ``columns`` is a sequence of ``(name, description with unit)``; ``profiles(name)`` returns
-    the array of that column. Both files are written atomically (:func:`atomic_write`); floats
-    in the CSV are written with ``repr`` (round-trip exact). Returns the two paths.
+    the array of that column. Both files are written atomically (:func:`atomic_write`), the
+    JSON by :func:`write_json`; floats in the CSV are written with ``repr`` (round-trip exact),
+    a non-finite one as an empty cell. Returns the two paths.
     """
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    json_path, csv_path = directory / f"{stem}.json", directory / f"{stem}.csv"
-    data = dict(data, profile_columns=dict(columns))
-    atomic_write(json_path, lambda f: json.dump(data, f, indent=2, sort_keys=True, allow_nan=False))
+    csv_path = directory / f"{stem}.csv"
+    json_path = write_json(directory / f"{stem}.json", dict(data, profile_columns=dict(columns)))
 
     def write_csv(f):
         w = csv.writer(f, lineterminator="\n")
         w.writerow([name for name, _ in columns])
         for row in zip(*(profiles(name) for name, _ in columns)):
-            w.writerow([repr(float(v)) for v in row])
+            w.writerow([_csv_cell(v) for v in row])
 
     atomic_write(csv_path, write_csv)
     return json_path, csv_path
+
+
+@functools.cache
+def _versions() -> tuple:
+    """(name, version) of the package, its numerical dependencies and Python, and the git
+    commit of the source tree ("unknown" outside a git checkout): fixed for a process."""
+    from importlib import metadata
+
+    from . import __version__
+
+    out = [("vesicle-tube", __version__), ("python", platform.python_version())]
+    for name in ("numpy", "scipy", "numba"):
+        try:
+            out.append((name, metadata.version(name)))
+        except metadata.PackageNotFoundError:       # pragma: no cover - not installed
+            out.append((name, "unknown"))
+    try:
+        git = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
+                             capture_output=True, text=True, timeout=5, check=False)
+        commit = git.stdout.strip() or "unknown"
+    except (OSError, subprocess.SubprocessError):
+        commit = "unknown"
+    out.append(("git_commit", commit))
+    return tuple(out)
+
+
+def provenance() -> dict:
+    """Where a result comes from: ``vesicle-tube`` (the package version), ``python``,
+    ``numpy``, ``scipy``, ``numba`` (versions), ``git_commit`` (of the source tree, "unknown"
+    outside a git checkout) and ``date`` (now, UTC, ISO 8601 to the second).
+
+    Examples
+    --------
+    >>> sorted(provenance())
+    ['date', 'git_commit', 'numba', 'numpy', 'python', 'scipy', 'vesicle-tube']
+    """
+    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    return {**dict(_versions()), "date": now}

@@ -10,13 +10,12 @@ only the inputs, ``message`` and the diagnostics are meaningful then. Its :meth:
 None for those scalars, and :meth:`LubricationResult.save` writes only the JSON (no profile CSV).
 
 In :meth:`LubricationResult.to_dict` (and the saved JSON) every number is finite: NaN and
-infinity are written as None (JSON null). The one infinite input, ``ca_b = inf`` of the high-Ca
+infinity are written as None (JSON null; the policy of :mod:`lubrication.io`). The one infinite input, ``ca_b = inf`` of the high-Ca
 model, is therefore ``"ca_b": null`` beside ``"model": "high-Ca"``.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .io import atomic_write, save_result
+from .io import clean_json, save_result, write_json
 
 __all__ = ["LubricationResult", "PROFILE_COLUMNS"]
 
@@ -39,20 +38,6 @@ PROFILE_COLUMNS = (
     ("shear_membrane", "viscous shear stress on the membrane [eta U / R]"),
     ("shear_wall", "viscous shear stress on the wall [eta U / R]"),
 )
-
-
-def _json_scalar(value):
-    """Python scalars for JSON: NaN and +-inf -> None, numpy -> float/int (strict JSON)."""
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        value = float(value)
-        return value if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {k: _json_scalar(v) for k, v in value.items()}
-    return value
 
 
 @dataclass(frozen=True, eq=False)      # eq=False: arrays have no truth value; compare fields
@@ -147,11 +132,11 @@ class LubricationResult:
                 "tension_max", "curvature_rear", "curvature_front", "shape_class",
                 "force_balance_residual", "area_error", "volume_error", "n_nodes",
                 "max_residual", "tol", "timings", "provenance")
-        out = {k: _json_scalar(getattr(self, k)) for k in keys}
+        out = {k: clean_json(getattr(self, k)) for k in keys}
         if not self.success:
             out["shape_class"] = None          # no shape from a failed solve
-        out["lam_ratio"] = _json_scalar(self.lam_ratio)
-        out["delta"] = _json_scalar(self.delta)
+        out["lam_ratio"] = clean_json(self.lam_ratio)
+        out["delta"] = clean_json(self.delta)
         out["converged"] = bool(self.success)
         return out
 
@@ -177,9 +162,6 @@ class LubricationResult:
         if not self.success:
             directory = Path(directory)
             directory.mkdir(parents=True, exist_ok=True)
-            data = self.to_dict()
-            path = atomic_write(directory / f"{stem}.json", lambda f: json.dump(
-                data, f, indent=2, sort_keys=True, allow_nan=False))
-            return (path,)
+            return (write_json(directory / f"{stem}.json", self.to_dict()),)
         return save_result(directory, stem, self.to_dict(), PROFILE_COLUMNS,
                            lambda name: np.asarray(getattr(self, name)))

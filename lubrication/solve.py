@@ -66,21 +66,19 @@ nu = 0.9), below which that model has no solution; up to 1 (exclusive: critical 
 
 from __future__ import annotations
 
-import importlib.metadata
 import logging
 import math
-import platform
 import time
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy
 from scipy.integrate import cumulative_trapezoid, solve_bvp
 
 from .checks import CannotPassError, Deadline, InvalidParameterError, check_range
 from .equations import (BENDING_STATE, HIGH_CA_STATE, _gap_flow, capillary_number, rhs_bending,
                         rhs_high_ca, spherical_cap)
 from .geometry import critical_confinement, critical_length
+from .io import provenance
 from .results import LubricationResult
 
 __all__ = ["solve_lubrication", "sweep_lubrication", "check_inputs", "lowest_lam_ratio",
@@ -558,15 +556,6 @@ def _verdict(prob, model, diag):
 
 
 # --------------------------------------------------------------------------- 7. result
-def _provenance():
-    try:
-        version = importlib.metadata.version("vesicle-tube")
-    except importlib.metadata.PackageNotFoundError:   # running from a source tree
-        version = "unknown"
-    return {"package": "vesicle-tube", "version": version, "numpy": np.__version__,
-            "scipy": scipy.__version__, "python": platform.python_version()}
-
-
 def _cap_extent(k, eps):
     """Arc length and axial height (pole to rim, signed) of a spherical cap of curvature k."""
     theta, _, _ = spherical_cap(k, eps)
@@ -581,7 +570,7 @@ def _failed(prob, message, diag, timings, state=None):
                                  "n_nodes", "max_residual") if k in diag}
     return LubricationResult(nu=prob.nu, lam=prob.lam, lam_c=prob.lam_c, ca_b=prob.ca_b,
                              model=prob.model, success=False, message=message, tol=prob.tol,
-                             timings=timings, provenance=_provenance(), solver_state=state, **keep)
+                             timings=timings, provenance=provenance(), solver_state=state, **keep)
 
 
 def _result(prob, model, sol, y, diag, message, timings):
@@ -635,7 +624,7 @@ def _result(prob, model, sol, y, diag, message, timings):
         force_balance_residual=diag["force_balance_residual"], area_error=diag["area_error"],
         volume_error=diag["volume_error"], n_nodes=diag["n_nodes"],
         max_residual=diag["max_residual"], tol=prob.tol, timings=timings,
-        provenance=_provenance(),
+        provenance=provenance(),
         solver_state=(model, t, y, sol.p.copy(),
                       dict(delta=prob.delta, area=prob.area, volume=prob.volume,
                            ca=ca)))

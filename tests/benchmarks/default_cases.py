@@ -17,13 +17,11 @@ The seven cases are the default-option failures of the solver before its consist
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
-from bem.results import provenance
 from bem.vesicle import MAX_MODES, mode_convergence, solve_vesicle
-from lubrication.io import atomic_write
+from lubrication.io import provenance, write_json
 
 SEVEN = "0.8:1.0,0.7:1.2,0.6:1.5,0.7:1.5,0.9:r0.98,0.7:r0.95,0.6:1.94"
 KEYS = ("V_over_U", "dp_plus_R0", "tension_max")
@@ -76,8 +74,8 @@ def main() -> None:
             print(f"{'':>12} not converged: {res.message}", flush=True)
         out.append(row)
         if args.json:
-            atomic_write(Path(args.json), lambda f: json.dump(
-                {"rows": out, "provenance": provenance()}, f, indent=1, default=str))
+            write_json(Path(args.json), {"rows": out, "provenance": provenance()}, indent=1,
+                       sort_keys=False)
 
 
 if __name__ == "__main__":

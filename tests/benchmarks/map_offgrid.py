@@ -29,7 +29,7 @@ from pathlib import Path
 from bem.vesicle import solve_vesicle
 from correlations.map_build import DEFAULT_GRID
 from correlations.solution_map import load_map, query_map
-from lubrication.io import atomic_write
+from lubrication.io import write_json
 
 TARGETS = {"V_over_U": 2e-3, "dp_plus_R0": 2e-2, "ell": 2e-2, "film_min": 5e-2}
 COVERAGE_TARGET = 0.9
@@ -97,8 +97,8 @@ def main(argv=None) -> int:
         row["map"] = {q: {"value": query.quantities[q].value, "error": query.quantities[q].error,
                           "note": query.quantities[q].note} for q in TARGETS}
         rows.append(row)
-        atomic_write(out_path, lambda f: json.dump(
-            {"map": source, "targets": TARGETS, "points": rows}, f, indent=1))
+        write_json(out_path, {"map": source, "targets": TARGETS, "points": rows}, indent=1,
+                   sort_keys=False)
         d = row["direct"]
         cells = []
         for q in TARGETS:

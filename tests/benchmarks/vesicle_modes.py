@@ -13,13 +13,11 @@ validation asks for the observed order at (0.6, 1.94); about 5 min for the defau
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
-from bem.results import provenance
 from bem.vesicle import mode_convergence, solve_vesicle
-from lubrication.io import atomic_write
+from lubrication.io import provenance, write_json
 
 
 def _fmt(row: dict) -> str:
@@ -57,7 +55,7 @@ def main() -> None:
                "default_solve": base.to_dict(shape=False),
                "default_levels": base.refinement, "default_seconds": time.perf_counter() - t0,
                "provenance": provenance()}
-        atomic_write(out, lambda f: json.dump(doc, f, indent=1, default=str))
+        write_json(out, doc, indent=1, sort_keys=False)
 
 
 if __name__ == "__main__":

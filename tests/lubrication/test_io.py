@@ -1,0 +1,135 @@
+"""Result output (lubrication.io): strict JSON with non-finite numbers as null, atomic files,
+provenance; and every result writer of the project following that one policy."""
+
+import datetime
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+import lubrication
+from lubrication.io import clean_json, provenance, save_result, write_json
+
+
+def _strict(text: str):
+    """Parse JSON refusing NaN, Infinity and -Infinity (what a strict reader does)."""
+    def refuse(token):
+        raise ValueError(f"non-standard JSON token {token}")
+    return json.loads(text, parse_constant=refuse)
+
+
+# ------------------------------------------------------------------ clean_json
+def test_non_finite_numbers_become_null_at_any_depth_and_in_numpy_containers():
+    data = {"nan": math.nan, "inf": math.inf, "-inf": -math.inf, "np_nan": np.float64("nan"),
+            "finite": np.float32(0.5), "int": np.int64(7), "flag": np.bool_(False),
+            "array": np.array([[1.0, np.inf], [np.nan, -2.0]]), "tuple": (1, math.nan),
+            "nested": {"list": [{"x": -math.inf}]}, "text": "nan", "none": None}
+    assert clean_json(data) == {
+        "nan": None, "inf": None, "-inf": None, "np_nan": None, "finite": 0.5, "int": 7,
+        "flag": False, "array": [[1.0, None], [None, -2.0]], "tuple": [1, None],
+        "nested": {"list": [{"x": None}]}, "text": "nan", "none": None}
+    assert type(clean_json(np.int64(7))) is int and type(clean_json(np.bool_(True))) is bool
+
+
+_leaves = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**6, 10**6),
+                    st.booleans(), st.none(), st.text(max_size=5))
+_trees = st.recursive(_leaves, lambda kids: st.lists(kids, max_size=4)
+                      | st.dictionaries(st.text(max_size=4), kids, max_size=4), max_leaves=20)
+
+
+def _same(written, original) -> bool:
+    """``written`` is ``original`` with every non-finite float replaced by None."""
+    if isinstance(original, float) and not math.isfinite(original):
+        return written is None
+    if isinstance(original, dict):
+        return written.keys() == original.keys() and all(_same(written[k], v)
+                                                         for k, v in original.items())
+    if isinstance(original, list):
+        return len(written) == len(original) and all(map(_same, written, original))
+    return written == original and type(written) is type(original)
+
+
+@given(tree=_trees)
+def test_write_json_is_strict_and_keeps_every_finite_value_exactly(tree, tmp_path_factory):
+    path = tmp_path_factory.mktemp("json") / "a.json"
+    assert write_json(path, {"data": tree}) == path
+    assert _same(_strict(path.read_text(encoding="utf-8"))["data"], tree)
+
+
+def test_written_files_are_atomic_and_csv_cells_of_non_finite_numbers_are_empty(tmp_path):
+    cols = (("x", "position [R]"), ("y", "value [-]"))
+    prof = {"x": np.array([0.0, 0.1]), "y": np.array([np.nan, 1.0 / 3.0])}
+    jpath, cpath = save_result(tmp_path, "r", {"a": math.inf}, cols, prof.__getitem__)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv", "r.json"]   # no temp files
+    assert _strict(jpath.read_text()) == {"a": None, "profile_columns": dict(cols)}
+    assert cpath.read_text().splitlines() == ["x,y", "0.0,", f"0.1,{1.0 / 3.0!r}"]
+
+
+# ------------------------------------------------------------------ every result writer
+def test_result_writers_write_non_finite_numbers_as_null(tmp_path):
+    """The failed results and sweeps of both solvers (NaN outputs, an infinite Ca_B) and a
+    sphere result with NaN error estimates: strict JSON, null where the number is not finite."""
+    from bem.results import DropResult, SphereResult, VesicleResult
+    from bem.sweep import save_sweep
+    from lubrication.results import LubricationResult
+
+    lub = LubricationResult(nu=0.9, lam=1.0, lam_c=1.2, ca_b=math.inf, model="high-Ca",
+                            success=False, message="failed", timings={"total_s": math.nan})
+    drop = DropResult(lam=0.8, ca=0.1, success=False, message="failed",
+                      error_estimate={"V_over_U": math.nan})
+    ves = VesicleResult(nu=0.9, lam=1.0, lam_c=1.2, ca_b=50.0, success=False, message="failed",
+                        refinement=[[16, math.inf, math.nan, math.nan, math.nan]])
+    sphere = SphereResult(lam=0.5, V_over_U=1.6, dp_plus_R=0.5, dp_plus_R0=0.25, drag_K=5.9,
+                          dp_translating_R=-3.0, V_over_U_err=math.nan, dp_plus_R_err=math.inf,
+                          drag_K_err=np.float64(1e-9), converged=True, tol=1e-8, panels={},
+                          panels_coarse={}, half_length=math.nan, residual=1e-15,
+                          null_multiplier=0.0, timings={})
+    paths = [*lub.save(tmp_path), *drop.save(tmp_path), *ves.save(tmp_path),
+             sphere.save(tmp_path), *save_sweep(tmp_path / "sweep", [ves], profiles=False)]
+    saved = {p.name: _strict(p.read_text()) for p in paths if p.suffix == ".json"}
+    assert len(saved) == 5
+    lub_d = next(v for k, v in saved.items() if k.startswith("lubrication"))
+    assert lub_d["ca_b"] is None and lub_d["model"] == "high-Ca" and lub_d["V_over_U"] is None
+    assert lub_d["timings"] == {"total_s": None}
+    drop_d = next(v for k, v in saved.items() if k.startswith("bem_drop"))
+    assert drop_d["error_estimate"] == {"V_over_U": None} and drop_d["dp_plus_R"] is None
+    ves_d = next(v for k, v in saved.items() if k.startswith("bem_vesicle_nu"))
+    assert ves_d["refinement"] == [[16, None, None, None, None]]
+    sph_d = next(v for k, v in saved.items() if k.startswith("bem_sphere"))
+    assert sph_d["V_over_U_err"] is None and sph_d["dp_plus_R_err"] is None
+    assert sph_d["drag_K_err"] == 1e-9 and sph_d["half_length"] is None
+    sweep_d = next(v for k, v in saved.items() if k.startswith("bem_vesicle_sweep"))
+    assert sweep_d["points"][0]["V_over_U"] is None
+
+
+# ------------------------------------------------------------------ provenance
+def test_provenance_names_versions_commit_and_date():
+    p = provenance()
+    assert p["vesicle-tube"] == lubrication.__version__
+    assert p["numpy"] == np.__version__ and re.fullmatch(r"3\.\d+\.\d+.*", p["python"])
+    assert p["scipy"] and p["numba"]
+    assert p["git_commit"] == "unknown" or re.fullmatch(r"[0-9a-f]{40}", p["git_commit"])
+    when = datetime.datetime.fromisoformat(p["date"])
+    now = datetime.datetime.now(datetime.timezone.utc)
+    assert when.tzinfo is not None and abs((now - when).total_seconds()) < 60
+    assert json.loads(json.dumps(p, allow_nan=False)) == p
+
+
+@pytest.mark.parametrize("make", ["bem_drop", "bem_vesicle", "lubrication"])
+def test_every_result_records_the_one_provenance(make):
+    """Results of both packages carry lubrication.io.provenance (the BEM results by default;
+    the lubrication solver fills it in)."""
+    from bem.results import DropResult, VesicleResult
+    from lubrication.solve import solve_lubrication
+
+    if make == "bem_drop":
+        p = DropResult(lam=0.8, ca=0.1, success=False, message="").provenance
+    elif make == "bem_vesicle":
+        p = VesicleResult(nu=0.9, lam=1.0, lam_c=1.2, ca_b=50.0, success=False,
+                          message="").provenance
+    else:
+        p = solve_lubrication(0.9, lam_ratio=0.9, tol=1e-4).provenance
+    assert set(p) == set(provenance())
