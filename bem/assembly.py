@@ -46,7 +46,6 @@ __all__ = [
     "InfluenceBlocks",
     "TubeSystem",
     "assemble_influence",
-    "assemble_tube_system",
     "bordered_system",
     "poiseuille",
 ]
@@ -143,9 +142,3 @@ def bordered_system(blocks: InfluenceBlocks, geom: TubeGeometry, mode: str = "fr
     return TubeSystem(A=A, b=b, mode=mode, n_body=nb, n_wall=nw, i_V=i_V, i_dp=i_dp,
                       i_mu=i_mu, V_given=V_given)
 
-
-def assemble_tube_system(geom: TubeGeometry, mode: str = "free", *, V: float = 1.0,
-                         near: float | None = NEAR_FACTOR, tol: float = DEFAULT_TOL) -> TubeSystem:
-    """Assemble the influence blocks and border them for ``mode`` (see :func:`bordered_system`)."""
-    check_choice("mode", mode, MODES)
-    return bordered_system(assemble_influence(geom, near=near, tol=tol), geom, mode, V=V)
