@@ -1,4 +1,4 @@
-"""Geometry of confinement, small-object and near-critical asymptotics, and (issue 4) the
+"""Geometry of confinement, small-object and near-critical asymptotics, and the
 Secomb-Skalak / Barakat-Shaqfeh lubrication solver for a vesicle in a tube.
 
 Scalings used everywhere: lengths by the volume radius R0 (tube radius R where named), velocities

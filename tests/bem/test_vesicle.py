@@ -344,7 +344,7 @@ def test_near_critical_discrepancy_with_lubrication_shrinks():
 
 @pytest.mark.slow          # ~6 min (three 64-80-mode minima)
 def test_mode_convergence_is_geometric_at_nu_0p6_lam_1p94():
-    """(0.6, 1.94), lam/lam_c = 0.979, Ca_B = 50 (issue 6): with the density built once on the
+    """(0.6, 1.94), lam/lam_c = 0.979, Ca_B = 50: with the density built once on the
     default 64-mode BEM shape (stored) the levels 64, 72, 80 converge geometrically. Measured
     (docs/validation.md): V/U 1.0209209, 1.0208119, 1.0207880 (ratio of successive
     differences 0.22), gamma_max 999.60, 1007.30, 1009.85 (0.33), dp+R0 1778.211, 1778.395,

@@ -33,7 +33,7 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 NU = 0.98
 LAM_C = 1.1259300042085487        # root of 2x^3 - 3 nu^(-2/3) x^2 + 1 for nu = 0.98
 
-#: The columns the sweep CSV must have, in this order (issue 6), before the message.
+#: The columns the sweep CSV must have, in this order, before the message.
 CSV_COLUMNS = ["nu", "lam", "lam_c", "lam_ratio", "ca_b", "V_over_U", "dp_plus_R0", "ell",
                "film_min", "tension_max", "wall_shear_max", "shape_class", "converged", "residual", "volume_error",
                "area_error", "runtime"]

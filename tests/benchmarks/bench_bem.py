@@ -2,7 +2,7 @@
 
 Run with ``python tests/benchmarks/bench_bem.py [--cold]``. ``--cold`` removes the numba cache
 of ``bem`` first so that the compile time is measured from scratch (in a subprocess).
-Targets (issue, 2-core machine): sphere at a/R = 0.6 to 1e-8 in V/U in <= 0.5 s after
+Targets (2-core machine): sphere at a/R = 0.6 to 1e-8 in V/U in <= 0.5 s after
 compilation; clean drop at lam = 0.8, Ca = 0.1 (steady state by Newton, automatic refinement
 pair) in <= 30 s. ``--no-drop`` skips the drop rows.
 """

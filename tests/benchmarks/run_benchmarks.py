@@ -1,7 +1,7 @@
 """Benchmarks of the foundation: prints a table of measured times against the targets.
 
 Run with ``make benchmark`` (or ``python tests/benchmarks/run_benchmarks.py``). Not a test:
-timings depend on the machine; the targets are the issue's (2-core machine).
+timings depend on the machine; the targets are the project's (2-core machine).
 """
 
 from __future__ import annotations
