@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import argparse
 import collections
-import json
 import sys
 from pathlib import Path
 
 from correlations.solution_map import read_points
-from lubrication.io import atomic_write
+from lubrication.io import write_json
 
 BUILD = Path(__file__).resolve().parents[2] / "correlations" / "data" / "solution_map_build"
 KEYS = ("V_over_U", "dp_plus_R0", "ell", "film_min", "tension_max")
@@ -61,9 +60,9 @@ def main(argv=None) -> int:
     for delta in sorted(worst):
         print(f"{delta:6g} " + " ".join(f"{worst[delta][k]:12.2%}" for k in KEYS))
     if args.json:
-        atomic_write(args.json, lambda f: json.dump(
-            {"build": args.build, "rows": rows,
-             "worst": {str(d): w for d, w in sorted(worst.items())}}, f, indent=1))
+        write_json(args.json, {"build": args.build, "rows": rows,
+                               "worst": {str(d): w for d, w in sorted(worst.items())}},
+                   indent=1, sort_keys=False)
     return 0
 
 
