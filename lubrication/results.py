@@ -10,8 +10,9 @@ only the inputs, ``message`` and the diagnostics are meaningful then. Its :meth:
 None for those scalars, and :meth:`LubricationResult.save` writes only the JSON (no profile CSV).
 
 In :meth:`LubricationResult.to_dict` (and the saved JSON) every number is finite: NaN and
-infinity are written as None (JSON null; the policy of :mod:`lubrication.io`). The one infinite input, ``ca_b = inf`` of the high-Ca
-model, is therefore ``"ca_b": null`` beside ``"model": "high-Ca"``.
+infinity are written as None (JSON null; the policy of :mod:`lubrication.io`). The one infinite
+input, ``ca_b = inf`` of the high-Ca model, is therefore ``"ca_b": null`` beside ``"model":
+"high-Ca"``.
 """
 
 from __future__ import annotations

@@ -26,7 +26,7 @@ from bem.results import DROP_PROFILE_COLUMNS, DropResult
 from bem.shape import SpectralCurve, fit_curve, spheroid_curve
 from lubrication.checks import InvalidParameterError
 
-# ------------------------------------------------------------------ lam = 0.8: values and tolerances
+# ------------------------------------------------------------------ lam = 0.8: references
 #: Regression values, lam = 0.8: Ca -> (V/U, dp+ R/(eta U)), 10 digits of our converged solution
 #: (solve_drop defaults: modes 24, 32, 40, ... until the refinement pair agrees to tol = 1e-5 and
 #: the residual is below 1e-4). An independent computation confirmed every row to better than
