@@ -21,7 +21,7 @@ which every solve starts from the previous converged point (:func:`line_tasks`):
   ``seed`` names the start that converged, its ``message`` the reasons of the others.
 
 Every finished point, converged or failed, is written at once as its own JSON file
-(:func:`correlations.solution_map.point_filename`) through :func:`lubrication.io.atomic_write`,
+(:func:`correlations.solution_map.point_filename`) through :func:`lubrication.io.write_json` (atomic),
 so a killed build leaves only complete files. A restarted build skips the stored points of each
 line and warm-starts from the last converged *stored* point (BEM: the spectral ``modes`` and
 ``density`` of the point, rebuilt with :meth:`bem.shape.SpectralCurve.closed` at the new volume;
@@ -47,12 +47,12 @@ import logging
 import math
 import os
 import signal
-import subprocess
 import time
 from pathlib import Path
 
 from lubrication.checks import InvalidParameterError, check_range
-from lubrication.io import atomic_write
+from lubrication.io import provenance as run_provenance
+from lubrication.io import write_json
 
 from .solution_map import POINT_FORMAT, QUANTITIES, pack_map, point_filename, read_points
 
@@ -273,8 +273,8 @@ def solve_line(folder, method, ca_b, points, stored, options, max_time, provenan
             continue
         record, warm_next = _point(method, nu, r, ca_b, warm, options.get(method, {}),
                                    max_time, provenance)
-        atomic_write(folder / point_filename(method, nu, r, ca_b),
-                     lambda f, rec=record: json.dump(rec, f, indent=1, allow_nan=False))
+        write_json(folder / point_filename(method, nu, r, ca_b), record, indent=1,
+                   sort_keys=False)
         if warm_next is not None:
             warm = warm_next
         new.append(record)
@@ -284,20 +284,6 @@ def solve_line(folder, method, ca_b, points, stored, options, max_time, provenan
 
 
 # --------------------------------------------------------------------------- the build
-
-def _git_commit() -> str:
-    try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
-                             capture_output=True, text=True, timeout=5, check=False)
-        return out.stdout.strip() or "unknown"
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-
-
-def _provenance() -> dict:
-    from bem.results import provenance
-    return {**provenance(), "git_commit": _git_commit()}
-
 
 def _connect(scheduler: str):
     """A Dask client of the scheduler at ``scheduler``; InvalidParameterError if unreachable."""
@@ -321,6 +307,11 @@ def _stop(executor) -> None:
     executor.shutdown(wait=False, cancel_futures=True)
     for proc in workers:
         proc.terminate()
+    for proc in workers:
+        proc.join(timeout=5)
+    # wait for the pool's manager thread to see the ended workers and close its pipes: left
+    # running, it races the interpreter's exit hook ("OSError: Bad file descriptor" at exit)
+    executor.shutdown(wait=True)
 
 
 def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
@@ -385,11 +376,10 @@ def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
         folder.mkdir(parents=True, exist_ok=True)
         if old is None:
             info = {"grid": grid, "parameters": {"options": options, "max_time": max_time},
-                    "provenance": {**_provenance(), "created": _now()}}
-            atomic_write(folder / "build.json",
-                         lambda f: json.dump(info, f, indent=1, allow_nan=False))
+                    "provenance": run_provenance()}      # its date: the build's start
+            write_json(folder / "build.json", info, indent=1, sort_keys=False)
         provenance = old["provenance"] if old else info["provenance"]
-        provenance = {k: v for k, v in provenance.items() if k != "created"}
+        provenance = {k: v for k, v in provenance.items() if k not in ("created", "date")}
         return _run(folder, grid, options, workers, client, max_time, retry_failed, progress,
                     pack, provenance)
     finally:
@@ -488,8 +478,7 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
                         path = Path(folder) / point_filename(record["method"], record["nu"],
                                                              record["lam_ratio"], record["ca_b"])
                         if not path.exists():
-                            atomic_write(path, lambda fh, rec=record: json.dump(
-                                rec, fh, indent=1, allow_nan=False))
+                            write_json(path, record, indent=1, sort_keys=False)
                 except Exception as exc:    # noqa: BLE001 - a crashed line is reported
                     state["errors"].append(f"line {line}: {type(exc).__name__}: {exc}")
                     log.error("map build: line %s raised %s", line, exc)

@@ -684,7 +684,7 @@ def pack_map(folder, out=None) -> Path:
     shapes), ``holes`` (failed or missing grid points with their reasons) and the LOO errors
     ``loo_<axis>_<q>`` (see the module docstring).
     """
-    from lubrication.io import atomic_write
+    from lubrication.io import atomic_write, clean_json
     folder = Path(folder)
     try:
         build = json.loads((folder / "build.json").read_text(encoding="utf-8"))
@@ -722,5 +722,6 @@ def pack_map(folder, out=None) -> Path:
     data["units"].update({k: f"leave-one-out error of {k.split('_', 2)[2]} along "
                              f"{k.split('_')[1]}, in its interpolated variable" for k in loo})
     path = Path(out) if out is not None else folder / "solution_map.json"
+    data = clean_json(data)
     atomic_write(path, lambda f: json.dump(data, f, separators=(",", ":"), allow_nan=False))
     return path

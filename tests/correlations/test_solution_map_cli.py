@@ -178,7 +178,7 @@ def test_interrupted_build_resumes_with_only_the_missing_points(tmp_path, sig):
         assert proc.returncode == 130, err
         assert time.monotonic() - t0 < 15.0             # prompt, with room for a loaded machine
         last = err.strip().splitlines()[-1]
-        assert "interrupted" in last and "resume" in last and "Traceback" not in err
+        assert "interrupted" in last and "resume" in last and "Traceback" not in err, err
     else:
         assert proc.returncode == -signal.SIGKILL
         for f in out.glob(".*.tmp"):               # a write cut by SIGKILL stays a temporary
