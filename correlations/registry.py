@@ -66,10 +66,11 @@ eta_rel               single_file_chen2020           d <= 8 um, dp_plus_R0 and H
 
 Tensions are in eta V in the table (``tension_front`` is Chen et al.'s inverse vesicle capillary
 number 1/Ca_v = gamma_F/(eta V), eqs. sfilm4, tension2). The map and the solvers give gamma/(eta
-U); their rows divide by their own V/U: gamma/(eta V) = (gamma/(eta U))/(V/U). The map's V/U of
-that conversion is taken as exact (its error is an order of magnitude below the tension's), so
-the estimate's tensions in eta U and mN/m, which multiply back by the same V/U, carry exactly
-the map's error bar.
+U); their rows divide by V/U: gamma/(eta V) = (gamma/(eta U))/(V/U), a solver by its own, the
+map rows by the estimate's (the map's own wherever the map gives V/U; they need a valid V/U).
+That V/U is taken as exact in the conversion (its relative error is typically an order of
+magnitude below the tension's), so the estimate's tensions in eta U and mN/m, which multiply
+back by the same V/U, carry exactly the map's error bar.
 
 Opt-in solver rows (used first when the caller enables the solver, e.g. ``--solver
 lubrication``; otherwise the estimate only notes that the solver covers the case). With both
@@ -349,10 +350,9 @@ def _map_row(quantity: str, key: str):
             return Answer(v.value, None, map_method_name(v.methods))
         value, error = v.value, v.error
         if quantity in _TENSIONS:       # gamma/(eta V) = (gamma/(eta U))/(V/U), module docstring
-            speed = res.quantities["V_over_U"].value
-            if speed is None:
-                raise MethodNotApplicable(f"no V/U in the map to express {key} in eta V")
-            value, error = value / speed, None if error is None else error / speed
+            if "V_over_U" not in s:
+                raise MethodNotApplicable(f"needs a valid V_over_U to express {key} in eta V")
+            value, error = value / s["V_over_U"], None if error is None else error / s["V_over_U"]
         notes = []
         if ca_b > m.cas[-1]:
             notes.append(f"Ca_B={ca_b:.4g} above the map's largest {m.cas[-1]:g}: its values "

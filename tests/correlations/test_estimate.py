@@ -415,7 +415,7 @@ def _expected_methods(est, hematocrits: dict, use_map: bool = True):
 
     Without enabled solvers (the default), rows of numerical solvers are not candidates. The
     map rows come first and are chosen where the shipped map's own query has a value (for the
-    tensions also V/U, which converts them to eta V).
+    tensions the estimate also needs a V/U, which converts them to eta V).
     """
     state = {k: est[k] for k in ("nu", "lam", "lam_c", "delta", "ell_c")}
     if est.inputs.get("ca_b") is not None:
@@ -433,8 +433,7 @@ def _expected_methods(est, hematocrits: dict, use_map: bool = True):
             continue
         if query is not None and name in MAP_KEYS:
             v = query.quantities[MAP_KEYS[name]]
-            if v.value is not None and (not name.startswith("tension")
-                                        or query["V_over_U"] is not None):
+            if v.value is not None and (not name.startswith("tension") or "V_over_U" in state):
                 expected[name] = MAP_NAMES[v.methods]
                 state[name] = est[name]
                 continue
