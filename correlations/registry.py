@@ -103,9 +103,9 @@ from lubrication.checks import OUTPUT_BOUNDS, ValidityRange, check_output
 
 from . import film, pressure, shape, viscosity
 
-__all__ = ["Answer", "BEM_RANGE", "MAP_DEFAULT_CA_B", "Method", "MethodNotApplicable", "METHODS",
-           "OUTPUT_BOUNDS", "QUANTITIES", "SOLVERS", "SOLVER_COST", "SolverNotConverged",
-           "check_output", "map_method_name"]
+__all__ = ["Answer", "BEM_RANGE", "MAP", "MAP_DEFAULT_CA_B", "Method", "MethodNotApplicable",
+           "METHODS", "OUTPUT_BOUNDS", "QUANTITIES", "SOLVERS", "SOLVER_COST",
+           "SolverNotConverged", "check_output", "map_method_name"]
 
 #: Opt-in numerical solvers that rows of the table may name.
 SOLVERS = ("lubrication", "bem")
@@ -367,8 +367,9 @@ def _map_row(quantity: str, key: str):
     return evaluate
 
 
-_MAP_ROWS = tuple(Method(q, "solution_map", _MAP_SOURCE + (" (minimum gap)" if q == "film" else ""),
-                         _MAP_RANGE, _map_row(q, key), solver=MAP)
+_MAP_ROWS = tuple(Method(q, "solution_map",
+                         _MAP_SOURCE + (" (minimum gap)" if q == "film" else ""), _MAP_RANGE,
+                         _map_row(q, key), solver=MAP)
                   for q, key in _SOLUTION_KEYS)
 
 

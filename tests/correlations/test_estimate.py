@@ -644,7 +644,7 @@ def test_tiny_reduced_volume_is_rejected_or_finite():
 
 
 # ------------------------------------------------------------------------------------------
-# The BEM vesicle as an opt-in solver row (issue 6). A real solve takes minutes: the solver is
+# The BEM vesicle as an opt-in solver row. A real solve takes minutes: the solver is
 # replaced by a fake that returns a VesicleResult with distinctive numbers and counts its calls.
 # ------------------------------------------------------------------------------------------
 
@@ -738,8 +738,8 @@ def test_the_rbc_default_is_inside_the_bem_validated_range(fake_bem):
 
 
 def test_bem_outside_its_tested_range_is_neither_run_nor_noted(fake_bem):
-    e = estimate_dimensionless(*_near_critical(0.9, 0.99), solvers=())   # delta = 0.01 < 0.02
-    f = estimate_dimensionless(*_near_critical(0.5, 0.9), solvers=("bem",))  # nu < 0.6
+    e = estimate_dimensionless(*_near_critical(0.9, 0.99), solvers=(), **NO_MAP)   # delta 0.01
+    f = estimate_dimensionless(*_near_critical(0.5, 0.9), solvers=("bem",), **NO_MAP)  # nu < 0.6
     g = estimate_dimensionless(*_near_critical(0.9, 0.99), solvers=("bem",), **NO_MAP)
     assert fake_bem.calls == []
     assert not any("bem" in n for n in e.notes + f.notes + g.notes)

@@ -11,17 +11,14 @@ from __future__ import annotations
 import json
 import math
 
-import numpy as np
 import pytest
+from test_estimate import MAP_NAMES, ref_lam_c, ref_speed_asmyp1
 from test_solution_map import _fake_build
 
 from correlations import registry
 from correlations.estimate import estimate, estimate_dimensionless
 from correlations.solution_map import DEFAULT_MAP, load_map, query_map
 
-#: The method name the estimate reports for a map value, from the methods of its nodes.
-MAP_NAMES = {("bem",): "map (BEM, interpolated)", ("lubrication",): "map (lubrication, "
-             "interpolated)", ("bem", "lubrication"): "map (BEM + lubrication, interpolated)"}
 #: Estimate quantity -> its name in the map, for the quantities in the same unit.
 SAME_UNIT = {"V_over_U": "V_over_U", "film": "film_min", "ell": "ell",
              "dp_plus_R0": "dp_plus_R0"}
@@ -29,20 +26,6 @@ TENSIONS = ("tension_front", "tension_max")
 
 shipped = pytest.mark.skipif(not DEFAULT_MAP.exists(),
                              reason=f"no solution map shipped at {DEFAULT_MAP}")
-
-
-def ref_lam_c(nu):
-    """Largest real root of 2x^3 - 3 nu^(-2/3) x^2 + 1 (numpy.roots, then one Newton step)."""
-    a = nu ** (-2.0 / 3.0)
-    x = float(max(r.real for r in np.roots([2.0, -3.0 * a, 0.0, 1.0]) if abs(r.imag) < 1e-9))
-    return x - (2.0 * x**3 - 3.0 * a * x**2 + 1.0) / (6.0 * x * x - 6.0 * a * x)
-
-
-def ref_speed_asmyp1(nu, lam):
-    """Chen et al. 2020 eq. asmyp1."""
-    lc = ref_lam_c(nu)
-    X = lc**2 * nu ** (-2.0 / 3.0)
-    return 1.0 + 4.0 / 3.0 * ((3.0 * X - 2.0) / (4.0 * X - 3.0)) * (1.0 - lam / lc)
 
 
 @pytest.fixture(scope="module")
@@ -240,7 +223,7 @@ MAP_KEYS = ("V_over_U", "V_mm_s", "dp_plus_R0", "dp_plus_Pa", "film", "film_nm",
 
 
 @shipped
-def test_the_default_estimate_answers_from_the_shipped_map():
+def test_the_default_estimate_answers_from_the_shipped_map(cli):
     """make run: the human RBC in a 4 um capillary (nu = 0.61, lam/lam_c = 0.71, Ca_B = 46)
     gets V/U, V, dp+, film, L and both tensions from the map, each with an error bar; the
     single-file viscosity then has its dp+."""
@@ -252,6 +235,11 @@ def test_the_default_estimate_answers_from_the_shipped_map():
         assert q.method.startswith("map (") and q.valid and q.error is not None, (key, q)
         assert 0.0 <= q.error < abs(q.value), (key, q)
     assert e.quantities["eta_rel"].method == "single_file_chen2020"
+    code, table, _ = cli("estimate")
+    for label in ("speed V/U", "cell speed V", "extra pressure drop dp+", "film thickness h",
+                  "length L", "front tension gamma_F", "maximum tension gamma_max"):
+        rows = [line for line in table.splitlines() if line.startswith(label)]
+        assert rows and all("±" in line for line in rows), (label, rows)
 
 
 @shipped
