@@ -19,7 +19,8 @@ from lubrication.checks import (InvalidParameterError, OutOfRangeWarning, check_
                                 check_positive, check_range)
 from lubrication.cli_contract import (EXIT_INTERRUPTED, EXIT_INVALID, EXIT_NOT_CONVERGED, EXIT_OK,
                                       Parser, UsageError, check_output_dir, check_plot_path,
-                                      dump_json, format_rows, interrupted_message,
+                                      dump_json, format_rows, format_value_error,
+                                      interrupted_message,
                                       non_finite_keys, one_line, options_named,
                                       quiet_broken_pipe, save_plot)
 
@@ -35,7 +36,10 @@ LABELS = {
     "dp_plus_R0": "extra pressure drop dp+", "dp_plus_R": "extra pressure drop dp+",
     "dp_plus_Pa": "extra pressure drop dp+", "shape_class": "shape class",
     "tension_front": "front tension gamma_F", "tension_front_etaU": "front tension gamma_F",
-    "tension_front_mN_m": "front tension gamma_F", "tube_hematocrit": "tube hematocrit H_T",
+    "tension_front_mN_m": "front tension gamma_F", "tension_max": "maximum tension gamma_max",
+    "tension_max_etaU": "maximum tension gamma_max",
+    "tension_max_mN_m": "maximum tension gamma_max",
+    "tube_hematocrit": "tube hematocrit H_T",
     "discharge_hematocrit": "discharge hematocrit H_D", "eta_rel": "relative apparent viscosity",
     "reduced_area_excess": "reduced excess area 4pi(nu^-2/3 - 1)", "nu_c": "largest nu passing (nu_c)",
     "diameter_um": "tube diameter d", "ratio_HT_over_HD": "Fahraeus ratio H_T/H_D",
@@ -52,8 +56,8 @@ UNIT_CONVENTION = ('unit column: a physical unit, or the scale of a dimensionles
 ESTIMATE_ROWS = ("nu", "lam", "lam_c", "delta", "ell_c", "passes", "R0_um", "d_c_um", "L_c_um",
                  "ca_b", "shape_class", "V_over_U", "V_mm_s", "dp_plus_R0", "dp_plus_R",
                  "dp_plus_Pa", "film", "film_nm", "ell", "length_um", "tension_front",
-                 "tension_front_etaU", "tension_front_mN_m", "tube_hematocrit",
-                 "discharge_hematocrit", "eta_rel")
+                 "tension_front_etaU", "tension_front_mN_m", "tension_max", "tension_max_etaU",
+                 "tension_max_mN_m", "tube_hematocrit", "discharge_hematocrit", "eta_rel")
 
 # The option a user types for each parameter name of the library (messages name the option).
 OPTIONS = {
@@ -72,6 +76,8 @@ def _options(args, **renamed):
 
 
 def _quantity_rows(quantities: dict, keys) -> list:
+    """Table rows of estimate quantities: a value with an error bar as ``value ± error``, and
+    the note of such a value (what its error bar leaves out) as its flag."""
     rows = []
     for key in keys:
         if key not in quantities:
@@ -80,7 +86,11 @@ def _quantity_rows(quantities: dict, keys) -> list:
         flag = "" if q.valid or q.method in (None, "input") else "EXTRAPOLATED (outside validity)"
         if q.value is None and q.method is None:
             flag = "no valid method" if q.note.startswith("no valid") else q.note
-        rows.append((LABELS.get(key, key), q.value, q.unit, q.method or "", flag))
+        value = q.value
+        if q.error is not None and q.value is not None:
+            value = format_value_error(q.value, q.error)
+            flag = flag or q.note
+        rows.append((LABELS.get(key, key), value, q.unit, q.method or "", flag))
     return rows
 
 
@@ -148,7 +158,8 @@ def cmd_estimate(args) -> dict:
         h = {f"{args.hematocrit_kind}_hematocrit": args.hematocrit} if args.hematocrit is not None else {}
         with _options(args, tube_hematocrit="--hematocrit", discharge_hematocrit="--hematocrit"):
             est = estimate_dimensionless(args.nu, args.lam, args.ca_b, extrapolate=args.extrapolate,
-                                         solvers=tuple(args.solver), **h)
+                                         solvers=tuple(args.solver),
+                                         solution_map=False if args.no_map else None, **h)
         title = f"Dimensionless estimate: nu = {args.nu:g}, lam = {args.lam:g}"
     else:
         if args.ca_b is not None:
@@ -158,7 +169,8 @@ def cmd_estimate(args) -> dict:
               if getattr(args, k) is not None}
         with _options(args):
             est = estimate(**kw, hematocrit=args.hematocrit, hematocrit_kind=args.hematocrit_kind,
-                           extrapolate=args.extrapolate, solvers=tuple(args.solver))
+                           extrapolate=args.extrapolate, solvers=tuple(args.solver),
+                           solution_map=False if args.no_map else None)
         i = est.inputs
         title = (f"Engineering estimate: cell {i['volume_fl']:g} fL, {i['area_um2']:g} um^2 in a "
                  f"{i['diameter_um']:g} um tube; U = {i['velocity_mm_s']:g} mm/s, eta = "
@@ -350,6 +362,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="let the method table use this numerical solver where it is valid, "
                         "ahead of the closed forms (repeatable; lubrication: seconds, bem: the "
                         "BEM vesicle, most accurate, minutes per case)")
+    e.add_argument("--no-map", action="store_true",
+                   help="do not use the shipped solution map (stored BEM and lubrication "
+                        "solutions, used by default inside its range, after enabled solvers): "
+                        "closed forms and enabled solvers only")
     e.add_argument("--plot", metavar="FILE", help="write V/U and dp+ vs lam with this case marked (PNG)")
     common(e)
     e.set_defaults(func=cmd_estimate)

@@ -3,13 +3,21 @@ r"""Engineering estimate for a vesicle or red blood cell in a narrow tube.
 Scalings (stated once): lengths by the tube radius R where named ``/R`` (film h/R, length
 :math:`\ell = L/R`), otherwise by the volume radius R0; velocities by the mean Poiseuille
 velocity U; extra pressure drop :math:`\Delta p^+ R_0/(\eta U)` (``dp_plus_R0``) and
-:math:`\Delta p^+ R/(\eta U)` (``dp_plus_R``); front tension by :math:`\eta V` (``tension_front``,
-the inverse vesicle capillary number 1/Ca_v) and by :math:`\eta U` (``tension_front_etaU``).
+:math:`\Delta p^+ R/(\eta U)` (``dp_plus_R``); front and maximum tension by :math:`\eta V`
+(``tension_front``, the inverse vesicle capillary number 1/Ca_v, Chen et al. 2020 eqs. sfilm4,
+tension2; ``tension_max``) and by :math:`\eta U` (``tension_front_etaU``, ``tension_max_etaU``).
 
-Every number carries the method that produced it (a row of :mod:`correlations.registry`) and
-whether the case lies inside that method's validity range. Where no method is valid the number
-is reported as unavailable with the reasons, unless ``extrapolate=True`` is asked for, in which
-case the least-extrapolated method is used and the number is flagged ``valid=False``.
+Every number carries the method that produced it (a row of :mod:`correlations.registry`),
+whether the case lies inside that method's validity range, and its absolute error bar where the
+method has one (``error``, same unit; the solution map's rows, None for the closed forms).
+Numbers derived from another by a change of unit carry its error scaled alike. Where no method
+is valid the number is reported as unavailable with the reasons, unless ``extrapolate=True`` is
+asked for, in which case the least-extrapolated method is used and the number is flagged
+``valid=False``.
+
+By default the shipped solution map (:mod:`correlations.solution_map`) answers inside its range
+ahead of the closed forms (rows of :mod:`correlations.registry`); ``solution_map=False`` turns it
+off, and a path or :class:`~correlations.solution_map.SolutionMap` uses another map.
 
 Defaults describe a human red blood cell in a capillary (physics-notes §6 and sources there):
 volume 90 fL and area 135 µm² (Evans & Fung 1972; nu = 0.61, Chen et al. 2020 use 0.6), bending
@@ -22,6 +30,7 @@ diameter 4 µm (a narrow capillary; capillaries are 4-8 µm). Bilayer rupture te
 from __future__ import annotations
 
 import math
+import os
 import warnings
 from dataclasses import dataclass, field
 
@@ -29,12 +38,14 @@ import numpy as np
 
 from lubrication.checks import (CannotPassError, InvalidParameterError, OutOfRangeWarning,
                                 check_choice, check_fraction, check_positive, check_range)
+from lubrication.cli_contract import format_value_error
 from lubrication.geometry import (cell_from_volume_area, check_passes, check_reduced_volume,
                                   critical_diameter_um,
                                   critical_length, critical_length_um)
 
-from .registry import (BEM_DEFAULT_CA_B, LUBRICATION_DEFAULT_CA_B, METHODS, QUANTITIES,
-                       SOLVER_COST, SOLVERS, SolverNotConverged, check_output)
+from .registry import (BEM_DEFAULT_CA_B, LUBRICATION_DEFAULT_CA_B, MAP, MAP_DEFAULT_CA_B, METHODS,
+                       QUANTITIES, SOLVER_COST, SOLVERS, Answer, MethodNotApplicable,
+                       SolverNotConverged, check_output)
 
 __all__ = ["RBC_DEFAULTS", "PHYSICAL_BOUNDS", "RUPTURE_TENSION_MN_M", "UNITS", "Quantity",
            "Estimate", "estimate", "estimate_dimensionless"]
@@ -82,9 +93,11 @@ UNITS = {
     "nu": "-", "lam": "-", "lam_c": "-", "delta": "-", "ell_c": "R_c", "passes": "",
     "ca_b": "-", "V_over_U": "-", "film": "R", "ell": "R", "dp_plus_R0": "eta U/R0",
     "dp_plus_R": "eta U/R", "shape_class": "", "tension_front": "eta V",
-    "tension_front_etaU": "eta U", "tube_hematocrit": "-", "discharge_hematocrit": "-",
+    "tension_front_etaU": "eta U", "tension_max": "eta V", "tension_max_etaU": "eta U",
+    "tube_hematocrit": "-", "discharge_hematocrit": "-",
     "eta_rel": "-", "R0_um": "um", "d_c_um": "um", "L_c_um": "um", "V_mm_s": "mm/s",
     "dp_plus_Pa": "Pa", "film_nm": "nm", "length_um": "um", "tension_front_mN_m": "mN/m",
+    "tension_max_mN_m": "mN/m",
 }
 
 
@@ -93,6 +106,8 @@ class Quantity:
     """A number of the estimate with its provenance.
 
     ``value`` is None when no valid method exists (and extrapolation was not asked for).
+    ``error`` is its absolute error bar in ``unit`` where the method gives one (the solution
+    map), None where it is unknown (the closed forms, the solvers).
     """
 
     value: float | str | None
@@ -101,6 +116,7 @@ class Quantity:
     valid: bool
     source: str = ""
     note: str = ""
+    error: float | None = None
 
 
 @dataclass(frozen=True)
@@ -128,7 +144,8 @@ class Estimate:
             out["message"] = "; ".join(n for n in self.notes if "did not converge" in n)
         out.update({k: q.value for k, q in self.quantities.items()})
         out["methods"] = {k: {"method": q.method, "valid": q.valid, "source": q.source,
-                              "unit": q.unit, **({"note": q.note} if q.note else {})}
+                              "unit": q.unit, "error": q.error,
+                              **({"note": q.note} if q.note else {})}
                           for k, q in self.quantities.items()}
         out["inputs"] = dict(self.inputs)
         out["notes"] = list(self.notes)
@@ -140,16 +157,18 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
             solvers: tuple = (), log: dict | None = None) -> Quantity:
     """Evaluate ``quantity`` with the first valid method of the table (see module docstring).
 
-    Rows of an enabled solver come first; rows of other solvers are skipped, but when one would
-    have been valid that is recorded per quantity in ``log["covers"]``. Solver failures go to
-    ``log["failures"]`` and the next row is tried.
+    Rows of an enabled solver come first, then the map rows when ``solvers`` holds
+    :data:`~correlations.registry.MAP` (in table order), then the closed forms; rows of other
+    solvers are skipped, but when one would have been valid that is recorded per quantity in
+    ``log["covers"]``. Solver failures go to ``log["failures"]``, rows without a value here to
+    the reasons, and the next row is tried. The map rows are never an extrapolation fallback.
     """
     log = {} if log is None else log
     reasons, fallback = [], None
     rows = sorted((m for m in METHODS if m.quantity == quantity and
                    (m.solver is None or m.solver in solvers)), key=lambda m: m.solver is None)
     for m in METHODS:
-        if (m.quantity == quantity and m.solver is not None and m.solver not in solvers
+        if (m.quantity == quantity and m.solver in SOLVERS and m.solver not in solvers
                 and m.validity.contains(**known)):
             log.setdefault("covers", {}).setdefault(quantity, set()).add(m.solver)
     for m in rows:
@@ -161,61 +180,84 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
             continue
         bad = m.validity.violations(**known)
         if not bad:
-            value, failure = _evaluate(m, quantity, known, log)
+            answer, failure = _evaluate(m, quantity, known, log)
             if not failure:
-                return Quantity(value, UNITS[quantity], m.name, True, m.source)
+                return Quantity(answer.value, UNITS[quantity], answer.name or m.name, True,
+                                m.source, answer.note, answer.error)
             reasons.append(f"{m.name}: {failure}")
             continue
         reasons.append(f"{m.name}: {'; '.join(bad)}")
         dist = m.validity.distance(**known)
-        if extrapolate and (fallback is None or dist < fallback[0]):
+        if extrapolate and m.solver != MAP and (fallback is None or dist < fallback[0]):
             fallback = (dist, m)
     note = "no valid method (" + " | ".join(reasons) + ")" if reasons else "no method"
     if fallback is None:
         return Quantity(None, UNITS[quantity], None, False, "", note)
     m = fallback[1]
-    value, failure = _evaluate(m, quantity, {**extrapolated, **known}, log)
+    answer, failure = _evaluate(m, quantity, {**extrapolated, **known}, log)
     if failure:
         return Quantity(None, UNITS[quantity], None, False, "", f"{note}; {m.name}: {failure}")
-    return Quantity(value, UNITS[quantity], m.name, False, m.source, "EXTRAPOLATED; " + note)
+    return Quantity(answer.value, UNITS[quantity], answer.name or m.name, False, m.source,
+                    "EXTRAPOLATED; " + note, answer.error)
 
 
 def _evaluate(m, quantity: str, state: dict, log: dict):
-    """``(value, "")`` from method ``m``, or ``(None, reason)`` when it fails or its value breaks
-    the bounds of :func:`correlations.registry.check_output` (never a number from a failure)."""
-    if m.solver is not None:
+    """``(Answer, "")`` from method ``m``, or ``(None, reason)`` when it fails, has no value
+    here, or its value breaks the bounds of :func:`correlations.registry.check_output` (never a
+    number from a failure). A map row that answers is logged in ``log["ran"]``, one without a
+    value in ``log["map_refused"]`` (quantity: reason)."""
+    if m.solver in SOLVERS:
         log.setdefault("ran", set()).add(m.solver)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", OutOfRangeWarning)
-            value = m.evaluate(state)
+            answer = m.evaluate(state)
     except SolverNotConverged as exc:
         log.setdefault("failures", {})[m.solver] = str(exc)
         return None, str(exc)
-    except InvalidParameterError as exc:       # e.g. a fit evaluated where it is unphysical
-        return None, f"not applicable: {exc}"
-    if not isinstance(value, str):
-        value = float(value)
-    problem = check_output(quantity, value, state)
+    except (MethodNotApplicable, InvalidParameterError) as exc:
+        # InvalidParameterError: e.g. a fit evaluated where it is unphysical, a corrupt map
+        reason = str(exc) if isinstance(exc, MethodNotApplicable) else f"not applicable: {exc}"
+        if m.solver == MAP:
+            log.setdefault("map_refused", {})[quantity] = reason
+        return None, reason
+    if not isinstance(answer, Answer):
+        answer = Answer(answer)
+    if not isinstance(answer.value, str):
+        answer = Answer(float(answer.value), answer.error, answer.name, answer.note)
+    problem = check_output(quantity, answer.value, state)
     if problem:
-        if m.solver is not None:
+        if m.solver in SOLVERS:
             log.setdefault("failures", {})[m.solver] = f"rejected output: {problem}"
+        if m.solver == MAP:
+            log.setdefault("map_refused", {})[quantity] = f"rejected output: {problem}"
         return None, f"rejected output: {problem}"
-    return value, ""
+    if m.solver == MAP:
+        log.setdefault("ran", set()).add(MAP)
+    return answer, ""
 
 
 def _scaled(q: Quantity, factor: float, unit: str, times: Quantity | None = None) -> Quantity:
-    """``q`` (times ``times``) rescaled: a derived number inherits method, validity and note."""
+    """``q`` (times ``times``) rescaled: a derived number inherits method, validity, note and
+    error bar (scaled alike).
+
+    ``times`` is V/U, the scale that turns a tension in eta V into eta U: its own error is not
+    propagated. The tensions with an error bar are the map's, natively in eta U and divided by
+    the same V/U (:mod:`correlations.registry`), so the round trip carries exactly the map's
+    error.
+    """
     parts = [q] if times is None else [q, times]
     missing = [p for p in parts if p.value is None]
     if missing:
         return Quantity(None, unit, None, False, "", missing[0].note)
-    value = q.value * factor * (1.0 if times is None else times.value)
+    scale = factor * (1.0 if times is None else times.value)
+    value = q.value * scale
     if not math.isfinite(value):    # cannot happen inside PHYSICAL_BOUNDS; never report it
         return Quantity(None, unit, None, False, "", f"not representable ({value!r})")
     valid = all(p.valid for p in parts)
     note = next((p.note for p in parts if p.note), "")
-    return Quantity(value, unit, q.method, valid, q.source, note)
+    error = None if q.error is None else q.error * abs(scale)
+    return Quantity(value, unit, q.method, valid, q.source, note, error)
 
 
 def _regime(lam: float, delta: float) -> str:
@@ -255,16 +297,20 @@ def _hematocrits(tube_hematocrit, discharge_hematocrit) -> dict:
 
 
 def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapolate: bool,
-          solvers: tuple, log: dict):
+          solvers: tuple, log: dict, solution_map=None):
     """Geometry state, then every quantity of the table; returns (state, quantities).
 
-    ``log`` collects which disabled solvers would apply and which enabled ones failed.
+    ``log`` collects which disabled solvers would apply and which enabled ones failed, and
+    where the map had no value. The map rows take part unless ``solution_map`` is False.
     """
     lam_c = check_passes(nu, lam)
     state = {"nu": nu, "lam": lam, "lam_c": lam_c, "delta": 1.0 - lam / lam_c,
              "ell_c": critical_length(nu), **hematocrits}
     if ca_b is not None:
         state["ca_b"] = ca_b
+    if solution_map is not False:
+        state["solution_map"] = solution_map
+        solvers = (*solvers, MAP)
     if diameter_um is not None:
         state["diameter_um"] = diameter_um
     known, extrapolated, quantities = dict(state), {}, {}
@@ -282,12 +328,15 @@ def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapola
                  for k in ("lam_c", "ell_c", "delta")}
     dp = quantities["dp_plus_R0"]
     # dp+ R/(eta U) = (dp+ R0/(eta U)) / lam: a division, since 1/lam overflows for tiny lam.
-    dp_R = (Quantity(dp.value / lam, UNITS["dp_plus_R"], dp.method, dp.valid, dp.source, dp.note)
+    dp_R = (Quantity(dp.value / lam, UNITS["dp_plus_R"], dp.method, dp.valid, dp.source, dp.note,
+                     None if dp.error is None else dp.error / lam)
             if dp.value is not None else Quantity(None, UNITS["dp_plus_R"], None, False, "",
                                                   dp.note))
+    # gamma/(eta U) = (gamma/(eta V)) (V/U)
     derived = {"dp_plus_R": dp_R,
-               "tension_front_etaU": _scaled(quantities["tension_front"], 1.0,
-                                             UNITS["tension_front_etaU"], quantities["V_over_U"])}
+               **{f"{t}_etaU": _scaled(quantities[t], 1.0, UNITS[f"{t}_etaU"],
+                                       quantities["V_over_U"])
+                  for t in ("tension_front", "tension_max")}}
     return state, {"nu": Quantity(nu, "-", "input", True), "lam": Quantity(lam, "-", "input", True),
                    "passes": Quantity(True, "", "lam < lam_c", True),
                    **geometric, **quantities, **derived}
@@ -296,7 +345,8 @@ def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapola
 def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
                            tube_hematocrit: float | None = None,
                            discharge_hematocrit: float | None = None,
-                           extrapolate: bool = False, solvers: tuple = ()) -> Estimate:
+                           extrapolate: bool = False, solvers: tuple = (),
+                           solution_map=None) -> Estimate:
     r"""Dimensionless estimate for reduced volume ``nu`` and confinement ``lam = R0/R``.
 
     Parameters
@@ -307,7 +357,8 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
         Confinement R0/R, 0 < lam < lam_c(nu) [-].
     ca_b : float, optional
         Bending capillary number eta U R0^2/kappa [-]; when omitted the correlations of Chen et
-        al. 2020 are assumed to apply (they hold for Ca_B >= ~10).
+        al. 2020 are assumed to apply (they hold for Ca_B >= ~10), and the solution map and the
+        solvers use Ca_B = 50 (Chen et al. 2020's value), as the output states.
     tube_hematocrit, discharge_hematocrit : float, optional
         At most one, a fraction in [0, 1); enables the single-file apparent viscosity.
     extrapolate : bool
@@ -319,6 +370,13 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
         to converge is reported in ``notes`` and makes ``converged`` False. A solver that is not
         enabled is never run, not even where no other method is valid: ``notes`` then says
         which solver covers the case and how to enable it.
+    solution_map : None, False, str, Path or SolutionMap
+        The solution map whose rows answer inside its range, after enabled solvers and ahead of
+        the closed forms (:mod:`correlations.registry`): None for the shipped map
+        (:data:`correlations.solution_map.DEFAULT_MAP`; where none is shipped the map rows have
+        no value and say so), a packed map file or a loaded map (a bad file raises
+        InvalidParameterError naming ``map`` before any work), or False for none (closed forms
+        and solvers only).
 
     Raises
     ------
@@ -327,7 +385,7 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
 
     Examples
     --------
-    >>> e = estimate_dimensionless(0.9, 1.25)
+    >>> e = estimate_dimensionless(0.9, 1.25, solution_map=False)     # closed forms only
     >>> e.regime.split(" (")[0], round(e["V_over_U"], 3), e.quantities["V_over_U"].method
     ('near-critical', 1.06, 'near_critical_barakat2018a')
     """
@@ -339,7 +397,9 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
     if ca_b is not None:
         ca_b = float(check_positive("ca_b", ca_b))
     solvers, log = _check_solvers(solvers), {}
-    state, quantities = _core(nu, lam, ca_b, hematocrits, None, extrapolate, solvers, log)
+    solution_map = _check_solution_map(solution_map)
+    state, quantities = _core(nu, lam, ca_b, hematocrits, None, extrapolate, solvers, log,
+                              solution_map)
     quantities["ca_b"] = _ca_b_quantity(ca_b, solvers, log)
     inputs = {"nu": nu, "lam": lam, "ca_b": ca_b, **hematocrits}
     return Estimate(inputs=inputs, quantities=quantities, regime=_regime(lam, state["delta"]),
@@ -351,19 +411,20 @@ def _ca_b_quantity(ca_b, solvers: tuple, log: dict) -> Quantity:
     """The Ca_B the estimate used, stated: the input, or what stands in when none is given.
 
     The closed forms of the table do not take Ca_B: they are correlations at Chen et al.'s
-    Ca_B = 50 and assume 10 <= Ca_B <= 1e4. The solver rows take the case's Ca_B, and 50 (Chen
-    et al. 2020) when none is given.
+    Ca_B = 50 and assume 10 <= Ca_B <= 1e4. The solver and map rows take the case's Ca_B, and
+    50 (Chen et al. 2020) when none is given.
     """
     if ca_b is not None:
         return Quantity(ca_b, UNITS["ca_b"], "input", True)
-    ran = sorted(s for s in solvers if s in log.get("ran", ()))
+    ran = sorted(s for s in (*solvers, MAP) if s in log.get("ran", ()))
     if ran:
-        default = {"lubrication": LUBRICATION_DEFAULT_CA_B, "bem": BEM_DEFAULT_CA_B}
+        default = {"lubrication": LUBRICATION_DEFAULT_CA_B, "bem": BEM_DEFAULT_CA_B,
+                   MAP: MAP_DEFAULT_CA_B}
         values = {default[s] for s in ran}
         if len(values) == 1:
+            who = " and ".join("the solution map" if s == MAP else f"the {s} solver" for s in ran)
             return Quantity(values.pop(), UNITS["ca_b"],
-                            f"assumed by the {' and '.join(ran)} solver (not given; Chen et al. "
-                            "2020 value)", True)
+                            f"assumed by {who} (not given; Chen et al. 2020 value)", True)
     return Quantity(None, UNITS["ca_b"], None, False, "",
                     "not given: the closed forms assume Chen et al. 2020's regime 10 <= Ca_B <= "
                     "1e4 (their results are at Ca_B = 50); give --ca-b to state it")
@@ -375,8 +436,33 @@ def _check_solvers(solvers) -> tuple:
     return tuple(solvers)
 
 
+def _check_solution_map(choice):
+    """``choice`` checked before any work: None or False as they are, a path loaded (raises
+    InvalidParameterError naming ``map`` for a missing or foreign file), a map as it is."""
+    from .solution_map import SolutionMap, load_map
+    if choice is None or choice is False or isinstance(choice, SolutionMap):
+        return choice
+    if isinstance(choice, (str, os.PathLike)):
+        return load_map(choice)
+    raise InvalidParameterError("solution_map", choice, "None (the shipped map), False (no map), "
+                                "a packed map file or a SolutionMap")
+
+
 def _notes(quantities: dict, ca_b, log: dict) -> tuple:
     notes = []
+    mapped = [k for k in QUANTITIES if (quantities[k].method or "").startswith("map (")]
+    if mapped:
+        used = f"{ca_b:.4g}" if ca_b is not None else f"{MAP_DEFAULT_CA_B:g} (assumed: not given)"
+        notes.append(f"{', '.join(mapped)} from the solution map at Ca_B = {used}, "
+                     "interpolated between stored steady solutions; ± is its error bar "
+                     "(interpolation + solver + model error, the parts it knows).")
+    refused = {}        # where the map had no value and a later row answered (else: "why")
+    for k, reason in log.get("map_refused", {}).items():
+        if quantities[k].value is not None:
+            refused.setdefault(reason, []).append(k)
+    for reason, keys in refused.items():
+        notes.append(f"The solution map gives no {', '.join(keys)} here ({reason}): "
+                     "the next method of the table answers.")
     for solver, message in sorted(log.get("failures", {}).items()):
         notes.append(f"The {solver} solver was enabled but did not converge: {message}")
     covers = log.get("covers", {})
@@ -408,7 +494,7 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
              plasma_viscosity_mpas: float = RBC_DEFAULTS["plasma_viscosity_mpas"],
              bending_modulus_j: float = RBC_DEFAULTS["bending_modulus_j"], *,
              hematocrit: float | None = None, hematocrit_kind: str = "tube",
-             extrapolate: bool = False, solvers: tuple = ()) -> Estimate:
+             extrapolate: bool = False, solvers: tuple = (), solution_map=None) -> Estimate:
     r"""Engineering estimate from physical inputs (defaults: human RBC in a 4 µm capillary).
 
     Parameters
@@ -429,15 +515,17 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
         Volume fraction in [0, 1) (not %); enables the apparent viscosity eta_rel.
     hematocrit_kind : {"tube", "discharge"}
         Whether ``hematocrit`` is the tube (H_T) or discharge (H_D) hematocrit.
-    extrapolate, solvers :
-        See :func:`estimate_dimensionless`.
+    extrapolate, solvers, solution_map :
+        See :func:`estimate_dimensionless`; the map and the solvers take Ca_B = eta U R0^2/kappa
+        from the inputs.
 
     Returns
     -------
     Estimate
         Dimensionless quantities as in :func:`estimate_dimensionless` plus ``R0_um``, ``d_c_um``,
-        ``L_c_um``, ``ca_b``, ``V_mm_s``, ``dp_plus_Pa``, ``film_nm``, ``length_um`` and
-        ``tension_front_mN_m``, each with its method and validity.
+        ``L_c_um``, ``ca_b``, ``V_mm_s``, ``dp_plus_Pa``, ``film_nm``, ``length_um``,
+        ``tension_front_mN_m`` and ``tension_max_mN_m``, each with its method, validity and
+        error bar.
 
     Raises
     ------
@@ -449,7 +537,9 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     >>> e = estimate()                       # RBC, 4 µm capillary, 1 mm/s
     >>> round(e["nu"], 3), round(e["lam"], 3), round(e["d_c_um"], 2), e["passes"]
     (0.61, 1.39, 2.85, True)
-    >>> e["V_over_U"] is None                # intermediate confinement: no closed form is valid
+    >>> e.regime.split(" (")[0]              # no closed form here: the solution map answers
+    'intermediate confinement'
+    >>> estimate(solution_map=False)["V_over_U"] is None     # closed forms only
     True
     """
     kind = check_choice("hematocrit_kind", hematocrit_kind, ("tube", "discharge"))
@@ -476,7 +566,9 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     if hematocrit is not None:
         hematocrits[f"{kind}_hematocrit"] = float(check_fraction("hematocrit", hematocrit))
     solvers, log = _check_solvers(solvers), {}
-    state, q = _core(nu, lam, ca_b, hematocrits, diameter_um, extrapolate, solvers, log)
+    solution_map = _check_solution_map(solution_map)
+    state, q = _core(nu, lam, ca_b, hematocrits, diameter_um, extrapolate, solvers, log,
+                     solution_map)
     inputs = {"volume_fl": float(volume_fl), "area_um2": float(area_um2), "diameter_um": diameter_um,
               "velocity_mm_s": U * 1e3, "plasma_viscosity_mpas": eta * 1e3, "bending_modulus_j": kappa,
               "hematocrit": hematocrit, "hematocrit_kind": kind}
@@ -488,15 +580,20 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
                     dp_plus_Pa=_scaled(q["dp_plus_R0"], eta * U / R0_m, "Pa"),
                     film_nm=_scaled(q["film"], R_m * 1e9, "nm"),
                     length_um=_scaled(q["ell"], R_m * 1e6, "um"),
-                    # gamma_F = (gamma_F/(eta V)) eta (V/U) U, in mN/m
-                    tension_front_mN_m=_scaled(q["tension_front"], eta * U * 1e3, "mN/m", q["V_over_U"]))
+                    # gamma = (gamma/(eta V)) eta (V/U) U, in mN/m
+                    **{f"{t}_mN_m": _scaled(q[t], eta * U * 1e3, "mN/m", q["V_over_U"])
+                       for t in ("tension_front", "tension_max")})
     notes = list(_notes(q, ca_b, log))
-    tension = physical["tension_front_mN_m"]
-    if tension.value is not None:
-        lo, hi = RUPTURE_TENSION_MN_M
-        verdict = ("below" if tension.value < lo else "within" if tension.value <= hi else "ABOVE")
-        flag = "" if tension.valid else " (EXTRAPOLATED value)"
-        notes.append(f"Front tension {tension.value:.3g} mN/m{flag} is {verdict} the bilayer rupture "
-                     f"range {lo:g}-{hi:g} mN/m.")
+    for name, key in (("Front", "tension_front_mN_m"), ("Maximum", "tension_max_mN_m")):
+        tension = physical[key]
+        if tension.value is not None:
+            lo, hi = RUPTURE_TENSION_MN_M
+            verdict = ("below" if tension.value < lo else "within" if tension.value <= hi
+                       else "ABOVE")
+            flag = "" if tension.valid else " (EXTRAPOLATED value)"
+            value = (format_value_error(tension.value, tension.error) if tension.error is not None
+                     else f"{tension.value:.3g}")
+            notes.append(f"{name} tension {value} mN/m{flag} is {verdict} the bilayer rupture "
+                         f"(lysis) range {lo:g}-{hi:g} mN/m.")
     return Estimate(inputs=inputs, quantities={**q, **physical}, regime=_regime(lam, state["delta"]),
                     notes=tuple(notes), provenance=_provenance(), converged=not log.get("failures"))

@@ -6,32 +6,71 @@ estimate takes the first one whose validity range contains the case (and whose i
 themselves valid). Where no method is valid the quantity is reported as unavailable, with the
 reason; it is extrapolated (and flagged ``valid=False``) only when the caller asks for it.
 
-Numerical solvers (the lubrication BVP, :mod:`lubrication.solve`; the BEM vesicle,
-:mod:`bem.vesicle`) extend the table with
-opt-in :class:`Method` rows for the range where they are valid (below).
+A row either returns a value or an :class:`Answer` (value, absolute error bar, the method name
+to report, a note), or raises :class:`MethodNotApplicable` with the reason it has no value here
+(the next row is tried and the reason joins the "no valid method" explanation).
 
 State passed to the methods (dimensionless unless named): ``nu``, ``lam``, ``lam_c``, ``delta``
-(= 1 - lam/lam_c), ``ell_c``, ``ca_b`` (= eta U R0^2/kappa, absent when unknown), the quantities
-computed earlier in table order, and the optional hematocrits.
+(= 1 - lam/lam_c), ``ell_c``, ``ca_b`` (= eta U R0^2/kappa, absent when unknown),
+``solution_map`` (the map the map rows read, below), the quantities computed earlier in table
+order, and the optional hematocrits.
+
+Numerical solvers (the lubrication BVP, :mod:`lubrication.solve`; the BEM vesicle,
+:mod:`bem.vesicle`) extend the table with opt-in rows, and the shipped solution map
+(:mod:`correlations.solution_map`) with rows used by default. Order of use: enabled solver rows
+(BEM, then lubrication), then the map rows, then the closed forms.
+
+Map rows (used unless the caller disables the map: ``solution_map=False``, ``--no-map``)
+--------------------------------------------------------------------------------------------
+One :func:`~correlations.solution_map.query_map` per (nu, lam/lam_c, Ca_B) serves every map row
+(:func:`_map_query`, cached); the file is read only when an estimate runs. Ca_B is the case's
+(eta U R0^2/kappa from the physical inputs), or :data:`MAP_DEFAULT_CA_B` = 50 (Chen et al.
+2020's value) when the dimensionless estimate has none; the estimate states which. A row has a
+value wherever the query returns one; elsewhere its reason (outside the map's nu, lam/lam_c or
+Ca_B range, next to a hole, no map shipped) goes into the explanation and the closed forms
+below apply as without a map. The map's own range rules hold: below its smallest Ca_B it
+refuses; above its largest Ca_B (when that is >= 50) and up to
+:data:`~correlations.solution_map.CA_B_CLAMP_MAX` = 1e4 it returns the values at its largest
+Ca_B, with the measured change between its two largest Ca_B added as model error (Chen et al.
+2020 §III.A: shapes virtually independent of Ca_B >= 50); beyond 1e4 it refuses. The reported
+method is "map (BEM, interpolated)", "map (lubrication, interpolated)" or "map (BEM +
+lubrication, interpolated)" after the methods of the nodes used, and the error bar is the
+map's: interpolation + solver + model error, the parts that are known (module docstring of
+:mod:`correlations.solution_map`).
 
 ====================  =============================  ==============================================
 quantity              methods, in order of preference  validity (range constant, with its source)
 ====================  =============================  ==============================================
-V_over_U              small_sphere_faxen             lam <= 0.5, nu >= 0.9 (SMALL_VESICLE_RANGE)
+V_over_U              solution_map                   inside the map (query_map returns a value)
+                      small_sphere_faxen             lam <= 0.5, nu >= 0.9 (SMALL_VESICLE_RANGE)
                       near_critical_barakat2018a     delta <= 0.1 (asymptotics.NEAR_CRITICAL_RANGE)
-film                  geometric_chen2020             delta <= 0.1 (film.FILM_RANGE_CHEN2020)
-ell                   length_chen2020                delta <= 0.1, nu >= 0.6 (shape.LENGTH_RANGE_CHEN2020)
-dp_plus_R0            small_sphere_faxen             lam <= 0.5, nu >= 0.9
+film                  solution_map (minimum gap)     inside the map
+                      geometric_chen2020             delta <= 0.1 (film.FILM_RANGE_CHEN2020)
+ell                   solution_map                   inside the map
+                      length_chen2020                delta <= 0.1, nu >= 0.6 (shape.LENGTH_RANGE_CHEN2020)
+dp_plus_R0            solution_map                   inside the map
+                      small_sphere_faxen             lam <= 0.5, nu >= 0.9
                       film_scaling_chen2020          delta <= 0.1 (pressure.DP_PLUS_FILM_RANGE_CHEN2020)
                       near_critical_barakat2018a     delta <= 0.1
-shape_class           transition_chen2020            0.6 <= nu, 0.6 <= lam <= 1.94, 10 <= Ca_B <= 1e4
-tension_front         film_inverse_chen2020          Ca_v <= 1e-2, i.e. film <= 0.093
+shape_class           solution_map                   inside the map, neighbours of one class
+                      transition_chen2020            0.6 <= nu, 0.6 <= lam <= 1.94, 10 <= Ca_B <= 1e4
+tension_front         solution_map                   inside the map
+                      film_inverse_chen2020          Ca_v <= 1e-2, i.e. film <= 0.093
+tension_max           solution_map                   inside the map (no closed form)
 tube_hematocrit       single_file_flux               d <= 8 um (viscosity.CHEN2020_RANGE)
                       fahraeus_pries1992             3.3 <= d <= 1978 um (viscosity.FAHRAEUS_RANGE)
 discharge_hematocrit  single_file_flux, fahraeus...  as tube_hematocrit
 eta_rel               single_file_chen2020           d <= 8 um, dp_plus_R0 and H_T valid
                       pries1992_in_vitro             3.3 <= d <= 1978 um, H_D <= 0.9
 ====================  =============================  ==============================================
+
+Tensions are in eta V in the table (``tension_front`` is Chen et al.'s inverse vesicle capillary
+number 1/Ca_v = gamma_F/(eta V), eqs. sfilm4, tension2). The map and the solvers give gamma/(eta
+U); their rows divide by V/U: gamma/(eta V) = (gamma/(eta U))/(V/U), a solver by its own, the
+map rows by the estimate's (the map's own wherever the map gives V/U; they need a valid V/U).
+That V/U is taken as exact in the conversion (its relative error is typically an order of
+magnitude below the tension's), so the estimate's tensions in eta U and mN/m, which multiply
+back by the same V/U, carry exactly the map's error bar.
 
 Opt-in solver rows (used first when the caller enables the solver, e.g. ``--solver
 lubrication``; otherwise the estimate only notes that the solver covers the case). With both
@@ -40,10 +79,10 @@ enabled the BEM rows come first (most accurate, slowest), then the lubrication r
 ====================  =============================  ==============================================
 V/U, film (minimum     bem_vesicle                    0.6 <= nu <= 0.98, delta >= 0.02, i.e.
 gap), ell, dp+, shape,                                lam/lam_c <= 0.98 (BEM_RANGE), tol 1e-2; Ca_B
-front tension                                         from the case, 50 if unknown; minutes/point
+front and max tension                                 from the case, 50 if unknown; minutes/point
 V/U, film (minimum     lubrication_solver             0.6 <= nu <= 0.98, delta <= 0.3
 gap), ell, dp+, shape,                                (LUBRICATION_RANGE); Ca_B from the case, 50 if
-front tension                                         unknown; seconds per point
+front and max tension                                 unknown; seconds per point
 ====================  =============================  ==============================================
 
 The BEM is never run unless the caller enables it, not even where no other method is valid:
@@ -64,11 +103,14 @@ from lubrication.checks import OUTPUT_BOUNDS, ValidityRange, check_output
 
 from . import film, pressure, shape, viscosity
 
-__all__ = ["BEM_RANGE", "Method", "METHODS", "OUTPUT_BOUNDS", "QUANTITIES", "SOLVERS",
-           "SOLVER_COST", "SolverNotConverged", "check_output"]
+__all__ = ["Answer", "BEM_RANGE", "MAP", "MAP_DEFAULT_CA_B", "Method", "MethodNotApplicable",
+           "METHODS", "OUTPUT_BOUNDS", "QUANTITIES", "SOLVERS", "SOLVER_COST",
+           "SolverNotConverged", "check_output", "map_method_name"]
 
 #: Opt-in numerical solvers that rows of the table may name.
 SOLVERS = ("lubrication", "bem")
+#: ``Method.solver`` of the map rows: used unless the caller disables the map.
+MAP = "map"
 
 #: Typical cost of one estimate with each solver (quoted in the estimate's notes).
 SOLVER_COST = {"lubrication": "seconds per case", "bem": "minutes per case"}
@@ -95,7 +137,8 @@ class Method:
     solver : str or None
         Name of the numerical solver behind the row (``"lubrication"``, ``"bem"``); such rows
         are used only when the caller enables that solver, and then ahead of the closed forms
-        (in the order of :data:`METHODS`: BEM first).
+        (in the order of :data:`METHODS`: BEM first). :data:`MAP` (``"map"``) for the rows of
+        the solution map, used unless the caller disables the map, after enabled solvers.
     """
 
     quantity: str
@@ -109,6 +152,22 @@ class Method:
 
 class SolverNotConverged(RuntimeError):
     """A solver row could not produce a converged solution (the message says why)."""
+
+
+class MethodNotApplicable(LookupError):
+    """A row has no value for this case (the message says why); the next row is tried."""
+
+
+@dataclass(frozen=True)
+class Answer:
+    """What a row may return instead of a bare value: the value, its absolute error bar in the
+    same unit (None when unknown), the method name to report (None: the row's name) and a
+    note."""
+
+    value: float | str
+    error: float | None = None
+    name: str | None = None
+    note: str = ""
 
 
 # Chen et al. 2020 state that their vesicle V/U and dp+ agree with the small rigid-sphere laws to
@@ -192,24 +251,28 @@ def _bem_result(nu: float, lam: float, ca_b: float):
     return _guarded(vesicle.solve_vesicle, nu, lam, ca_b=ca_b, **BEM_TOLERANCES)
 
 
+#: Table quantities a solver or the map gives, with the name of each in their results.
+_SOLUTION_KEYS = (("V_over_U", "V_over_U"), ("film", "film_min"), ("ell", "ell"),
+                  ("dp_plus_R0", "dp_plus_R0"), ("shape_class", "shape_class"),
+                  ("tension_front", "tension_front"), ("tension_max", "tension_max"))
+#: Tensions: gamma/(eta U) in the results, gamma/(eta V) in the table (module docstring).
+_TENSIONS = ("tension_front", "tension_max")
+
+
 def _solver_rows(solver: str, name: str, reference: str, rng: ValidityRange, solve,
                  default_ca_b: float) -> tuple[Method, ...]:
-    """Rows of one numerical solver for V/U, film (minimum gap), ell, dp+, shape class and
-    front tension; ``solve(nu, lam, ca_b)`` is cached, so one solve serves all rows (failures
+    """Rows of one numerical solver for V/U, film (minimum gap), ell, dp+, shape class, front
+    and maximum tension; ``solve(nu, lam, ca_b)`` is cached, so one solve serves all rows (failures
     included, so a solve that did not converge is not repeated for every row)."""
-    pairs = (("V_over_U", "V_over_U"), ("film", "film_min"), ("ell", "ell"),
-             ("dp_plus_R0", "dp_plus_R0"), ("shape_class", "shape_class"),
-             ("tension_front", "tension_front"))
-
     def values(res) -> dict:
         """Every table quantity of a solve, or SolverNotConverged: a solve that failed, or
         returned one non-finite or unphysical number, gives no number at all."""
         if not res.success:
             raise SolverNotConverged(f"{solver} solver did not converge: {res.message}")
         out = {}
-        for q, key in pairs:
+        for q, key in _SOLUTION_KEYS:
             value = getattr(res, key, None)
-            if q == "tension_front" and value is not None:   # table unit: eta V (result: eta U)
+            if q in _TENSIONS and value is not None:   # table unit: eta V (result: eta U)
                 value = value / res.V_over_U
             problem = check_output(q, value, {})
             if problem:
@@ -225,7 +288,7 @@ def _solver_rows(solver: str, name: str, reference: str, rng: ValidityRange, sol
     return tuple(
         Method(q, name, reference + (" (minimum gap)" if q == "film" else ""), rng, row(q),
                solver=solver)
-        for q, _ in pairs)
+        for q, _ in _SOLUTION_KEYS)
 
 
 _LUBRICATION_ROWS = _solver_rows(
@@ -234,6 +297,80 @@ _LUBRICATION_ROWS = _solver_rows(
     lambda *a: _lubrication_solution(*a), LUBRICATION_DEFAULT_CA_B)   # looked up at call time
 _BEM_ROWS = _solver_rows("bem", "bem_vesicle", "BEM vesicle, bem.vesicle.solve_vesicle", BEM_RANGE,
                          lambda *a: _bem_result(*a), BEM_DEFAULT_CA_B)
+
+
+# Solution map (correlations.solution_map): stored steady BEM and lubrication solutions over
+# (nu, lam/lam_c, Ca_B), interpolated with an error bar. The query decides where it has a value,
+# so the rows' validity box has no bounds.
+#: Ca_B used by the map rows when the estimate has none (Chen et al. 2020 use 50).
+MAP_DEFAULT_CA_B = 50.0
+_MAP_RANGE = ValidityRange.of("the box of the solution map, holes excluded (query_map decides)")
+_MAP_SOURCE = ("solution map (correlations.solution_map): stored BEM and lubrication solutions, "
+               "interpolated")
+
+
+def _solution_map(choice):
+    """The map the rows read: ``choice`` None for the shipped map (the rows have no value when
+    none is shipped), or a path or :class:`~correlations.solution_map.SolutionMap`."""
+    from .solution_map import DEFAULT_MAP, SolutionMap, load_map
+    if isinstance(choice, SolutionMap):
+        return choice
+    if choice is None and not DEFAULT_MAP.exists():
+        raise MethodNotApplicable(f"no solution map shipped ({DEFAULT_MAP} absent)")
+    return load_map(choice)
+
+
+@functools.lru_cache(maxsize=32)
+def _map_query(nu: float, lam_ratio: float, ca_b: float, solution_map):
+    """One :func:`~correlations.solution_map.query_map` per case and map: serves every map row."""
+    from .solution_map import query_map
+    return query_map(nu, lam_ratio, ca_b, solution_map)
+
+
+def map_method_name(methods) -> str:
+    """Reported name of a map value from the methods of the nodes it used.
+
+    >>> map_method_name(("bem", "lubrication"))
+    'map (BEM + lubrication, interpolated)'
+    """
+    labels = {"bem": "BEM", "lubrication": "lubrication"}
+    return "map (" + " + ".join(labels.get(m, m) for m in sorted(methods)) + ", interpolated)"
+
+
+def _map_row(quantity: str, key: str):
+    """``evaluate`` of the map row of ``quantity`` (``key`` its name in the map)."""
+    def evaluate(s: dict) -> Answer:
+        m = _solution_map(s.get("solution_map"))
+        ca_b = s.get("ca_b", MAP_DEFAULT_CA_B)
+        res = _map_query(s["nu"], s["lam"] / s["lam_c"], ca_b, m)
+        v = res.quantities[key]
+        if v.value is None:
+            raise MethodNotApplicable(v.note)
+        if isinstance(v.value, str):
+            return Answer(v.value, None, map_method_name(v.methods))
+        value, error = v.value, v.error
+        if quantity in _TENSIONS:       # gamma/(eta V) = (gamma/(eta U))/(V/U), module docstring
+            if "V_over_U" not in s:
+                raise MethodNotApplicable(f"needs a valid V_over_U to express {key} in eta V")
+            value, error = value / s["V_over_U"], None if error is None else error / s["V_over_U"]
+        notes = []
+        if ca_b > m.cas[-1]:
+            notes.append(f"Ca_B={ca_b:.4g} above the map's largest {m.cas[-1]:g}: its values "
+                         "there, the change from the next Ca_B added as model error")
+        unknown = [part for part, e in (("interpolation", v.interpolation_error),
+                                        ("solver", v.solver_error), ("model", v.model_error))
+                   if e is None]
+        if unknown:
+            notes.append(f"error bar without the unknown {' and '.join(unknown)} error"
+                         + ("s" if len(unknown) > 1 else ""))
+        return Answer(value, error, map_method_name(v.methods), "; ".join(notes))
+    return evaluate
+
+
+_MAP_ROWS = tuple(Method(q, "solution_map",
+                         _MAP_SOURCE + (" (minimum gap)" if q == "film" else ""), _MAP_RANGE,
+                         _map_row(q, key), solver=MAP)
+                  for q, key in _SOLUTION_KEYS)
 
 
 def _fahraeus_tube(s: dict) -> float:
@@ -251,6 +388,7 @@ def _eta_pries1992(s: dict) -> float:
 METHODS: tuple[Method, ...] = (
     *_BEM_ROWS,
     *_LUBRICATION_ROWS,
+    *_MAP_ROWS,
     Method("V_over_U", "small_sphere_faxen", "Chen et al. 2020 eq. small1 (Faxen)",
            SMALL_VESICLE_RANGE, lambda s: asymptotics.speed_small_sphere(s["lam"])),
     Method("V_over_U", "near_critical_barakat2018a",
@@ -297,5 +435,5 @@ METHODS: tuple[Method, ...] = (
 
 #: Output quantities in evaluation order (later rows may require earlier ones).
 QUANTITIES = ("V_over_U", "film", "ell", "dp_plus_R0", "shape_class", "tension_front",
-              "tube_hematocrit", "discharge_hematocrit", "eta_rel")
+              "tension_max", "tube_hematocrit", "discharge_hematocrit", "eta_rel")
 

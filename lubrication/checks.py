@@ -246,6 +246,7 @@ OUTPUT_BOUNDS = {
     "dp_plus_R0": (0.0, math.inf, "at a fixed flow rate Q, dp+ Q is the extra dissipation of a "
                                   "force-free cell in Stokes flow, which is not negative"),
     "tension_front": (0.0, math.inf, "the front tension of a confined vesicle pulls (> 0)"),
+    "tension_max": (0.0, math.inf, "the largest tension of a confined vesicle pulls (> 0)"),
     "tube_hematocrit": (0.0, 1.0, "a volume fraction"),
     "discharge_hematocrit": (0.0, 1.0, "a volume fraction"),
     "eta_rel": (1.0, math.inf, "force-free cells add dissipation: eta_rel >= 1"),

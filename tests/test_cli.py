@@ -118,7 +118,7 @@ def test_json_is_one_object_with_the_fixed_keys(cli, name):
 
 
 def test_estimate_default_json_values(cli):
-    code, out, _ = cli("estimate", "--json")
+    code, out, _ = cli("estimate", "--json", "--no-map")     # closed forms: no V/U here
     obj = strict_json(out)
     assert code == 0 and obj["passes"] is True and obj["V_over_U"] is None
     nu = 6.0 * math.sqrt(math.pi) * 90.0 * 135.0 ** -1.5
@@ -261,8 +261,9 @@ def test_viscosity_single_file_in_its_range(cli):
 
 
 def test_viscosity_single_file_outside_its_range_gives_no_other_law(cli):
-    """6 µm: no valid dp+ for an RBC, so no single-file value (and never Pries's)."""
-    code, out, err = cli("viscosity", "--diameter-um", "6", "--hematocrit", "0.45",
+    """16 µm: no valid dp+ for an RBC (lam/lam_c = 0.18, below the solution map's 0.2, and no
+    closed form), so no single-file value (and never Pries's)."""
+    code, out, err = cli("viscosity", "--diameter-um", "16", "--hematocrit", "0.45",
                          "--law", "single-file", "--json")
     obj = strict_json(out)
     assert code == 0
@@ -312,7 +313,7 @@ def test_out_of_range_viscosity_warns_on_stderr_and_in_json(cli):
     ["viscosity", "--diameter-um", "2", "--hematocrit", "0.45"],
     ["viscosity", "--diameter-um", "12", "--hematocrit", "0.45", "--law", "single-file",
      "--extrapolate"],
-    pytest.param(["viscosity", "--diameter-um", "6", "--hematocrit", "0.45", "--law", "single-file"], id="single-file-no-dp"),
+    pytest.param(["viscosity", "--diameter-um", "16", "--hematocrit", "0.45", "--law", "single-file"], id="single-file-no-dp"),
 ])
 def test_every_stderr_warning_is_in_the_json(cli, argv):
     code, out, err = cli(*argv, "--json")
@@ -545,12 +546,19 @@ def test_single_file_range_is_the_stored_validity_range(cli, monkeypatch):
 # ------------------------------------------------------------------------------------------
 
 def test_dimensionless_estimate_states_the_ca_b_it_used(cli):
-    _, out, _ = cli("estimate", "--nu", "0.9", "--lam", "1.25", "--json")
+    _, out, _ = cli("estimate", "--nu", "0.9", "--lam", "1.25", "--json", "--no-map")
     obj = strict_json(out)
     assert obj["ca_b"] is None and "not given" in obj["methods"]["ca_b"]["note"]
     assert "10 <= Ca_B <= 1e4" in obj["methods"]["ca_b"]["note"]
-    _, table, _ = cli("estimate", "--nu", "0.9", "--lam", "1.25")
+    _, table, _ = cli("estimate", "--nu", "0.9", "--lam", "1.25", "--no-map")
     assert "Ca_B" in table and "not given" in table
+    from correlations.solution_map import DEFAULT_MAP
+    if DEFAULT_MAP.exists():        # lam/lam_c = 0.94: inside the map, which assumes Ca_B = 50
+        _, out, _ = cli("estimate", "--nu", "0.9", "--lam", "1.25", "--json")
+        obj = strict_json(out)
+        assert obj["methods"]["V_over_U"]["method"].startswith("map (")
+        assert obj["ca_b"] == 50.0
+        assert "assumed by the solution map" in obj["methods"]["ca_b"]["method"]
     _, out, _ = cli("estimate", "--nu", "0.9", "--lam", "1.25", "--ca-b", "30", "--json")
     obj = strict_json(out)
     assert obj["ca_b"] == 30.0 and obj["methods"]["ca_b"]["method"] == "input"

@@ -1,10 +1,13 @@
-"""Benchmark of the solution map at the size of the default grid: pack time, packed file size
-and query cost (target: a query <= 50 ms after import). Not a test: timings depend on the
-machine.
+"""Benchmark of the solution map: pack time, packed file size and query cost at the size of the
+default grid (target: a query <= 50 ms after import), then the engineering estimate that reads
+the shipped map: one ``estimate()`` after import (target <= 50 ms; the first call, which reads
+the map file, separately) and the cold start of ``vesicle-tube estimate`` against a bare
+``python -c "import numpy, scipy"`` (target <= 3x). Not a test: timings depend on the machine.
 
-The map is synthetic (a smooth function stored as converged points on every node of
-correlations.map_build.DEFAULT_GRID), so no solver runs. Run with
-``python tests/benchmarks/bench_solution_map.py``.
+The pack/query map is synthetic (a smooth function stored as converged points on every node of
+correlations.map_build.DEFAULT_GRID), so no solver runs. The estimate timings use whatever map is
+shipped at correlations/data/solution_map.json (skipped without one). Run with
+``python tests/benchmarks/bench_solution_map.py`` (``make benchmark``).
 """
 
 from __future__ import annotations
@@ -13,12 +16,15 @@ import json
 import math
 import random
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 QUERY_TARGET_MS = 50.0
+ESTIMATE_TARGET_MS = 50.0
+COLD_START_TARGET_RATIO = 3.0
 
 
 def _value(q, nu, r, ca):
@@ -48,6 +54,75 @@ def make_folder(folder: Path) -> None:
                     (folder / point_filename(m, nu, r, ca)).write_text(json.dumps(rec))
 
 
+def bench_estimate(repeat: int = 20) -> dict:
+    """Wall times [ms] of ``estimate()`` from the shipped map in this process: the first call
+    (reads the map file), then ``repeat`` calls each at a new velocity (a new Ca_B, so a new
+    map query, not a cached one), at the RBC default (4 um) and in a 3 um tube."""
+    from correlations import registry
+    from correlations.estimate import estimate
+    out = {}
+    t0 = time.perf_counter()
+    first = estimate()
+    out["first call (reads the map)"] = [1e3 * (time.perf_counter() - t0)]
+    for diameter in (4.0, 3.0):
+        registry._map_query.cache_clear()
+        times = []
+        for k in range(repeat):
+            t0 = time.perf_counter()
+            e = estimate(diameter_um=diameter, velocity_mm_s=0.9 + 0.01 * k)
+            times.append(1e3 * (time.perf_counter() - t0))
+        answered = e.quantities["V_over_U"].method or "no value"
+        out[f"d = {diameter:g} um, new Ca_B each call (V/U: {answered})"] = times
+    out["_first_method"] = first.quantities["V_over_U"].method
+    return out
+
+
+def _wall(argv, repeat: int) -> list[float]:
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        subprocess.run(argv, check=True, capture_output=True)
+        times.append(time.perf_counter() - t0)
+    return times
+
+
+def bench_cold_start(repeat: int = 5) -> tuple[list[float], list[float]]:
+    """Wall times [s] of ``vesicle-tube estimate`` and of ``python -c "import numpy, scipy"``,
+    alternating, ``repeat`` runs each."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from run_benchmarks import _cli
+    cli, bare = [], []
+    for _ in range(repeat):
+        cli += _wall(_cli(), 1)
+        bare += _wall([sys.executable, "-c", "import numpy, scipy"], 1)
+    return cli, bare
+
+
+def report_estimate() -> bool:
+    """Print the estimate and cold-start timings; True when both targets are met."""
+    from correlations.solution_map import DEFAULT_MAP
+    if not DEFAULT_MAP.exists():
+        print(f"estimate: skipped (no map shipped at {DEFAULT_MAP})")
+        return True
+    runs = bench_estimate()
+    print(f"estimate() from the shipped map (V/U at the RBC default: "
+          f"{runs.pop('_first_method') or 'no value'}; target <= {ESTIMATE_TARGET_MS:g} ms):")
+    ok = True
+    for name, times in runs.items():
+        best, med = min(times), statistics.median(times)
+        fine = med <= ESTIMATE_TARGET_MS
+        ok &= fine
+        print(f"  {name}: min {best:.1f} ms, median {med:.1f} ms over {len(times)}: "
+              f"{'ok' if fine else 'SLOW'}")
+    cli, bare = bench_cold_start()
+    ratio = statistics.median(cli) / statistics.median(bare)
+    print(f"cold start: vesicle-tube estimate median {statistics.median(cli):.3f} s (min "
+          f"{min(cli):.3f}), python -c 'import numpy, scipy' median {statistics.median(bare):.3f} "
+          f"s (min {min(bare):.3f}), ratio {ratio:.2f} (target <= {COLD_START_TARGET_RATIO:g}): "
+          f"{'ok' if ratio <= COLD_START_TARGET_RATIO else 'SLOW'}")
+    return ok and ratio <= COLD_START_TARGET_RATIO
+
+
 def main() -> int:
     from correlations.solution_map import load_map, pack_map, query_map
     folder = Path(tempfile.mkdtemp(prefix="bench-map-"))
@@ -68,7 +143,8 @@ def main() -> int:
     print(f"points {len(m.columns['nu'])}, pack {pack_s:.1f} s, file {path.stat().st_size / 1e3:.0f} kB")
     print(f"query: median {med:.1f} ms, max {worst:.1f} ms over {len(times)} random queries "
           f"(target <= {QUERY_TARGET_MS:g} ms): {'ok' if worst <= QUERY_TARGET_MS else 'SLOW'}")
-    return 0 if worst <= QUERY_TARGET_MS else 1
+    estimate_ok = report_estimate()
+    return 0 if worst <= QUERY_TARGET_MS and estimate_ok else 1
 
 
 if __name__ == "__main__":

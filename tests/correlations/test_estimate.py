@@ -31,6 +31,9 @@ U_DEFAULT = 1e-3           # mean velocity [m/s]
 KAPPA_DEFAULT = 2e-19      # bending modulus [J]
 
 HEMATOCRIT_KEYS = ("tube_hematocrit", "discharge_hematocrit", "eta_rel")
+# The closed forms are tested without the solution map: inside the map's range its rows come
+# first (they are tested in tests/correlations/test_estimate_map.py).
+NO_MAP = {"solution_map": False}
 FIXED_KEYS = ("nu", "lam", "lam_c", "ell_c", "delta", "V_over_U", "dp_plus_R0", "eta_rel",
               "tube_hematocrit", "discharge_hematocrit", "passes")
 PHYSICAL_KEYS = ("d_c_um", "L_c_um", "R0_um")
@@ -133,8 +136,8 @@ def test_rbc_default_geometry():
     assert (round(nu, 2), round(lam, 2), round(2 * R0 / lam_c, 2)) == (0.61, 1.39, 2.85)
 
 
-def test_rbc_default_is_intermediate_and_reports_no_speed():
-    e = estimate()
+def test_rbc_default_without_the_map_is_intermediate_and_reports_no_speed():
+    e = estimate(**NO_MAP)
     assert e.regime.startswith("intermediate")
     q = e.quantities["V_over_U"]
     assert q.value is None and q.method is None and q.valid is False
@@ -142,7 +145,8 @@ def test_rbc_default_is_intermediate_and_reports_no_speed():
     assert "0 <= delta <= 0.1" in q.note
     assert "0 <= lam <= 0.5" in q.note and "0.9 <= nu <= 1" in q.note
     assert "small_sphere_faxen" in q.note and "near_critical_barakat2018a" in q.note
-    for key in ("V_mm_s", "dp_plus_R0", "dp_plus_Pa", "film", "film_nm", "tension_front_mN_m"):
+    for key in ("V_mm_s", "dp_plus_R0", "dp_plus_Pa", "film", "film_nm", "tension_front_mN_m",
+                "tension_max_mN_m"):
         assert e[key] is None, key
     assert any("extrapolate" in n for n in e.notes)
 
@@ -165,7 +169,8 @@ def test_bending_capillary_number_scales_with_the_inputs():
 
 @pytest.mark.parametrize("velocity_mm_s, viscosity_mpas", [(1.0, 1.2), (2.5, 0.8)])
 def test_near_critical_rbc_in_a_3_um_tube(velocity_mm_s, viscosity_mpas):
-    e = estimate(diameter_um=3.0, velocity_mm_s=velocity_mm_s, plasma_viscosity_mpas=viscosity_mpas)
+    e = estimate(diameter_um=3.0, velocity_mm_s=velocity_mm_s, plasma_viscosity_mpas=viscosity_mpas,
+                 **NO_MAP)
     nu, R0 = ref_nu(90.0, 135.0), ref_R0(90.0)
     lam = 2.0 * R0 / 3.0
     lam_c = ref_lam_c(nu)
@@ -200,7 +205,7 @@ def test_near_critical_rbc_in_a_3_um_tube(velocity_mm_s, viscosity_mpas):
 @pytest.mark.parametrize("nu, delta", [(0.9, 0.05), (0.7, 0.099), (0.6, 0.01), (0.95, 0.08)])
 def test_near_critical_dimensionless(nu, delta):
     lam = ref_lam_c(nu) * (1.0 - delta)
-    e = estimate_dimensionless(nu, lam)
+    e = estimate_dimensionless(nu, lam, **NO_MAP)
     assert e["V_over_U"] == _rel(ref_speed_asmyp1(nu, lam))
     assert e.quantities["V_over_U"].method == "near_critical_barakat2018a"
     # film_scaling_chen2020 comes before the asymptote in the table, and is valid for nu >= 0.6.
@@ -211,11 +216,14 @@ def test_near_critical_dimensionless(nu, delta):
 
 
 def test_near_critical_below_nu_06_uses_the_asymptote_for_dp():
-    """eq. sL is not valid below nu = 0.6, so the film scaling has no ell: eq. asmyp2 is used."""
+    """eq. sL is not valid below nu = 0.6, so the film scaling has no ell: eq. asmyp2 is used.
+    The shipped map (when there is one) does not reach nu = 0.5: the same with the map, whose
+    reason is in the explanation."""
     nu = 0.5
     lam = ref_lam_c(nu) * 0.95
     e = estimate_dimensionless(nu, lam)
     assert e["ell"] is None
+    assert e.quantities["ell"].note.startswith("no valid method (solution_map: ")
     assert e.quantities["dp_plus_R0"].method == "near_critical_barakat2018a"
     assert e["dp_plus_R0"] == pytest.approx(ref_dp_asmyp2(nu, lam), rel=1e-11)
 
@@ -223,7 +231,8 @@ def test_near_critical_below_nu_06_uses_the_asymptote_for_dp():
 def test_docstring_example_matches_printed_value():
     """estimate_dimensionless(0.9, 1.25): V/U ~ 1.06 (docstring)."""
     assert round(ref_speed_asmyp1(0.9, 1.25), 3) == 1.06
-    assert estimate_dimensionless(0.9, 1.25)["V_over_U"] == _rel(ref_speed_asmyp1(0.9, 1.25))
+    e = estimate_dimensionless(0.9, 1.25, **NO_MAP)
+    assert e["V_over_U"] == _rel(ref_speed_asmyp1(0.9, 1.25))
 
 
 # ------------------------------------------------------------------------------------------
@@ -232,7 +241,7 @@ def test_docstring_example_matches_printed_value():
 
 @pytest.mark.parametrize("nu, lam", [(0.9, 0.5), (0.95, 0.3), (1.0, 0.1), (0.99, 0.45)])
 def test_small_object_laws(nu, lam):
-    e = estimate_dimensionless(nu, lam)
+    e = estimate_dimensionless(nu, lam, **NO_MAP)
     assert e.regime.startswith("small object")
     assert e["V_over_U"] == _rel(2.0 - 4.0 / 3.0 * lam**2)
     assert e["dp_plus_R0"] == _rel(16.0 * lam**6)
@@ -241,7 +250,7 @@ def test_small_object_laws(nu, lam):
 
 
 def test_small_object_below_nu_09_has_no_speed():
-    e = estimate_dimensionless(0.8, 0.4)
+    e = estimate_dimensionless(0.8, 0.4, **NO_MAP)
     assert e["V_over_U"] is None and e["dp_plus_R0"] is None
 
 
@@ -249,7 +258,7 @@ def test_small_quasi_spherical_cell_in_physical_units():
     """R0 = 2 µm, nu = 0.95, 10 µm tube (lam = 0.4), U = 2 mm/s."""
     volume = 4.0 / 3.0 * math.pi * 8.0
     area = (6.0 * math.sqrt(math.pi) * volume / 0.95) ** (2.0 / 3.0)
-    e = estimate(volume_fl=volume, area_um2=area, diameter_um=10.0, velocity_mm_s=2.0)
+    e = estimate(volume_fl=volume, area_um2=area, diameter_um=10.0, velocity_mm_s=2.0, **NO_MAP)
     lam = 0.4
     assert e["lam"] == pytest.approx(lam, rel=1e-12)
     assert e["V_mm_s"] == pytest.approx((2.0 - 4.0 / 3.0 * lam**2) * 2.0, rel=1e-12)
@@ -262,7 +271,7 @@ def test_small_quasi_spherical_cell_in_physical_units():
 
 def test_tube_hematocrit_single_file_near_critical_dimensionless():
     nu, lam, ht = 0.9, 1.25, 0.3
-    e = estimate_dimensionless(nu, lam, tube_hematocrit=ht)
+    e = estimate_dimensionless(nu, lam, tube_hematocrit=ht, **NO_MAP)
     V_over_U, dp = ref_speed_asmyp1(nu, lam), ref_film_scaling(nu, lam)
     assert e["tube_hematocrit"] == ht and e.quantities["tube_hematocrit"].method == "input"
     assert e["discharge_hematocrit"] == _rel(ht * V_over_U)
@@ -272,7 +281,7 @@ def test_tube_hematocrit_single_file_near_critical_dimensionless():
 
 
 def test_tube_hematocrit_single_file_rbc_3_um():
-    e = estimate(diameter_um=3.0, hematocrit=0.3)
+    e = estimate(diameter_um=3.0, hematocrit=0.3, **NO_MAP)
     nu, lam = ref_nu(90.0, 135.0), 2.0 * ref_R0(90.0) / 3.0
     dp = ref_film_scaling(nu, lam)
     assert e["discharge_hematocrit"] == _rel(0.3 * ref_speed_asmyp1(nu, lam))
@@ -281,7 +290,7 @@ def test_tube_hematocrit_single_file_rbc_3_um():
 
 
 def test_discharge_hematocrit_single_file_rbc_3_um():
-    e = estimate(diameter_um=3.0, hematocrit=0.45, hematocrit_kind="discharge")
+    e = estimate(diameter_um=3.0, hematocrit=0.45, hematocrit_kind="discharge", **NO_MAP)
     nu, lam = ref_nu(90.0, 135.0), 2.0 * ref_R0(90.0) / 3.0
     ht = 0.45 / ref_speed_asmyp1(nu, lam)
     assert e["tube_hematocrit"] == _rel(ht)
@@ -291,7 +300,7 @@ def test_discharge_hematocrit_single_file_rbc_3_um():
 
 
 def test_discharge_hematocrit_where_speed_is_unavailable_uses_fahraeus_and_pries():
-    e = estimate(hematocrit=0.45, hematocrit_kind="discharge")     # RBC, 4 µm: no V/U
+    e = estimate(hematocrit=0.45, hematocrit_kind="discharge", **NO_MAP)   # RBC, 4 µm: no V/U
     assert e["V_over_U"] is None
     assert e.quantities["discharge_hematocrit"].method == "input"
     assert e.quantities["tube_hematocrit"].method == "fahraeus_pries1992"
@@ -302,7 +311,7 @@ def test_discharge_hematocrit_where_speed_is_unavailable_uses_fahraeus_and_pries
 
 
 def test_tube_hematocrit_where_speed_is_unavailable_inverts_fahraeus():
-    e = estimate(hematocrit=0.3)                                    # RBC, 4 µm, tube hematocrit
+    e = estimate(hematocrit=0.3, **NO_MAP)                          # RBC, 4 µm, tube hematocrit
     hd = e["discharge_hematocrit"]
     assert e.quantities["discharge_hematocrit"].method == "fahraeus_pries1992"
     assert ref_fahraeus_tube(4.0, hd) == pytest.approx(0.3, rel=1e-12)
@@ -322,10 +331,15 @@ def test_both_hematocrits_at_once_are_rejected():
 
 @pytest.mark.parametrize("hematocrit", [None, 0.3])
 def test_extrapolate_fills_every_gap_with_a_flagged_value(hematocrit):
-    plain = estimate(hematocrit=hematocrit)
-    extra = estimate(hematocrit=hematocrit, extrapolate=True)
+    plain = estimate(hematocrit=hematocrit, **NO_MAP)
+    extra = estimate(hematocrit=hematocrit, extrapolate=True, **NO_MAP)
+    # The maximum tension has no closed form (only the map and the solvers give it): nothing
+    # can extrapolate it.
     gaps = [k for k, q in plain.quantities.items()
-            if q.value is None and not q.note.startswith("not computed: give a hematocrit")]
+            if q.value is None and not q.note.startswith("not computed: give a hematocrit")
+            and not k.startswith("tension_max")]
+    assert all(plain[k] is None and extra[k] is None
+               for k in ("tension_max", "tension_max_etaU", "tension_max_mN_m"))
     assert gaps, "the RBC default should have unavailable quantities"
     for key in gaps:
         q = extra.quantities[key]
@@ -340,15 +354,16 @@ def test_extrapolate_fills_every_gap_with_a_flagged_value(hematocrit):
 
 
 def test_extrapolated_quantities_of_the_table_carry_the_extrapolated_note():
-    extra = estimate(extrapolate=True)
+    extra = estimate(extrapolate=True, **NO_MAP)
     for key in ("V_over_U", "film", "ell", "dp_plus_R0", "tension_front", "dp_plus_R",
                 "V_mm_s", "dp_plus_Pa", "film_nm", "length_um"):
         q = extra.quantities[key]
         assert q.valid is False and q.note.startswith("EXTRAPOLATED"), (key, q.note)
 
 
-def test_every_flagged_value_says_extrapolated():
-    extra = estimate(extrapolate=True)
+@pytest.mark.parametrize("kw", [NO_MAP, {}], ids=["closed-forms", "with-map"])
+def test_every_flagged_value_says_extrapolated(kw):
+    extra = estimate(extrapolate=True, **kw)
     for key, q in extra.quantities.items():
         if q.value is not None and not q.valid:
             assert q.note.startswith("EXTRAPOLATED"), (key, q.note)
@@ -377,15 +392,37 @@ def test_value_method_invariant_also_holds_with_extrapolation():
 # Properties over the (nu, lam) plane.
 # ------------------------------------------------------------------------------------------
 
-def _expected_methods(est, hematocrits: dict):
+#: The method name the estimate reports for a map value, from the methods of its nodes.
+MAP_NAMES = {("bem",): "map (BEM, interpolated)", ("lubrication",): "map (lubrication, "
+             "interpolated)", ("bem", "lubrication"): "map (BEM + lubrication, interpolated)"}
+#: Estimate quantity -> its name in the solution map.
+MAP_KEYS = {"V_over_U": "V_over_U", "film": "film_min", "ell": "ell", "dp_plus_R0": "dp_plus_R0",
+            "shape_class": "shape_class", "tension_front": "tension_front",
+            "tension_max": "tension_max"}
+
+
+def _shipped_map_query(nu, lam_ratio, ca_b):
+    """The shipped map's answer at the case (Ca_B = 50 when none is given), or None when no
+    map is shipped."""
+    from correlations.solution_map import DEFAULT_MAP, query_map
+    if not DEFAULT_MAP.exists():
+        return None
+    return query_map(nu, lam_ratio, 50.0 if ca_b is None else ca_b)
+
+
+def _expected_methods(est, hematocrits: dict, use_map: bool = True):
     """First row of the method table whose inputs are valid and whose range holds the state.
 
-    Without enabled solvers (the default), rows of numerical solvers are not candidates.
+    Without enabled solvers (the default), rows of numerical solvers are not candidates. The
+    map rows come first and are chosen where the shipped map's own query has a value (for the
+    tensions the estimate also needs a V/U, which converts them to eta V).
     """
     state = {k: est[k] for k in ("nu", "lam", "lam_c", "delta", "ell_c")}
     if est.inputs.get("ca_b") is not None:
         state["ca_b"] = est.inputs["ca_b"]
     state.update(hematocrits)
+    query = (_shipped_map_query(state["nu"], state["lam"] / state["lam_c"], state.get("ca_b"))
+             if use_map else None)
     expected = {}
     for name in QUANTITIES:
         if name in hematocrits:
@@ -394,6 +431,12 @@ def _expected_methods(est, hematocrits: dict):
         if name in HEMATOCRIT_KEYS and not hematocrits:
             expected[name] = None
             continue
+        if query is not None and name in MAP_KEYS:
+            v = query.quantities[MAP_KEYS[name]]
+            if v.value is not None and (not name.startswith("tension") or "V_over_U" in state):
+                expected[name] = MAP_NAMES[v.methods]
+                state[name] = est[name]
+                continue
         chosen = None
         for m in METHODS:
             if m.quantity != name or m.solver is not None or any(r not in state for r in m.requires):
@@ -422,39 +465,41 @@ def _expected_methods(est, hematocrits: dict):
 def test_estimate_dimensionless_properties(nu, frac, ca_b, hematocrit):
     lam = frac * ref_lam_c(nu)
     h = {} if hematocrit is None else {f"{hematocrit[0]}_hematocrit": hematocrit[1]}
-    e = estimate_dimensionless(nu, lam, ca_b, **h)          # never raises
+    for use_map in (True, False):               # with the shipped map, and closed forms only
+        e = estimate_dimensionless(nu, lam, ca_b, solution_map=None if use_map else False,
+                                   **h)          # never raises
 
-    assert e["lam_c"] == pytest.approx(ref_lam_c(nu), rel=1e-6)
-    assert e["passes"] is True
-    v = e.quantities["V_over_U"]
-    if v.value is not None:
-        assert v.valid and 1.0 <= v.value <= 2.0
-    p = e.quantities["dp_plus_R0"]
-    if p.value is not None:
-        assert p.value > 0.0
-        assert e["dp_plus_R"] == pytest.approx(p.value / lam, rel=1e-14)
+        assert e["lam_c"] == pytest.approx(ref_lam_c(nu), rel=1e-6)
+        assert e["passes"] is True
+        v = e.quantities["V_over_U"]
+        if v.value is not None:
+            assert v.valid and 1.0 <= v.value <= 2.0
+        p = e.quantities["dp_plus_R0"]
+        if p.value is not None:
+            assert p.value > 0.0
+            assert e["dp_plus_R"] == pytest.approx(p.value / lam, rel=1e-14)
 
-    # Each quantity's method is the first valid row of the registry for this state.
-    expected = _expected_methods(e, h)
-    got = {k: e.quantities[k].method for k in QUANTITIES}
-    assert got == expected
-    rows = {(m.quantity, m.name): m for m in METHODS}
-    for name, method in got.items():
-        if method not in (None, "input"):
-            m = rows[(name, method)]
-            for b, lo, hi in m.validity.bounds:
-                if b in ("nu", "lam", "delta"):
-                    assert lo <= e[b] <= hi, (name, method, b, e[b])
+        # Each quantity's method is the first valid row of the registry for this state.
+        expected = _expected_methods(e, h, use_map)
+        got = {k: e.quantities[k].method for k in QUANTITIES}
+        assert got == expected
+        rows = {(m.quantity, m.name): m for m in METHODS}
+        for name, method in got.items():
+            if method not in (None, "input") and not method.startswith("map ("):
+                m = rows[(name, method)]
+                for b, lo, hi in m.validity.bounds:
+                    if b in ("nu", "lam", "delta"):
+                        assert lo <= e[b] <= hi, (name, method, b, e[b])
 
-    _check_value_method_invariant(e)
+        _check_value_method_invariant(e)
 
-    d = e.to_dict()
-    text = json.dumps(d, allow_nan=False)
-    assert json.loads(text) == json.loads(json.dumps(d))
-    assert set(FIXED_KEYS) <= set(d)
-    assert d["converged"] is True
-    if p.value is not None:
-        assert "dp_plus_R" in d
+        d = e.to_dict()
+        text = json.dumps(d, allow_nan=False)
+        assert json.loads(text) == json.loads(json.dumps(d))
+        assert set(FIXED_KEYS) <= set(d)
+        assert d["converged"] is True
+        if p.value is not None:
+            assert "dp_plus_R" in d
 
 
 @given(volume=st.floats(40.0, 150.0), nu=st.floats(0.5, 0.99),
@@ -475,7 +520,8 @@ def test_estimate_physical_properties(volume, nu, d_over_dc, hematocrit):
     _check_value_method_invariant(e)
 
 
-@pytest.mark.parametrize("make", [estimate, lambda: estimate_dimensionless(0.61, 1.39)],
+@pytest.mark.parametrize("make", [lambda: estimate(**NO_MAP),
+                                  lambda: estimate_dimensionless(0.61, 1.39, **NO_MAP)],
                          ids=["rbc-default", "dimensionless-intermediate"])
 def test_to_dict_has_dp_plus_R_even_when_unavailable(make):
     d = make().to_dict()
@@ -598,11 +644,12 @@ def test_tiny_reduced_volume_is_rejected_or_finite():
 
 
 # ------------------------------------------------------------------------------------------
-# The BEM vesicle as an opt-in solver row (issue 6). A real solve takes minutes: the solver is
+# The BEM vesicle as an opt-in solver row. A real solve takes minutes: the solver is
 # replaced by a fake that returns a VesicleResult with distinctive numbers and counts its calls.
 # ------------------------------------------------------------------------------------------
 
-BEM_QUANTITIES = ("V_over_U", "film", "ell", "dp_plus_R0", "shape_class", "tension_front")
+BEM_QUANTITIES = ("V_over_U", "film", "ell", "dp_plus_R0", "shape_class", "tension_front",
+                  "tension_max")
 
 
 class FakeBem:
@@ -619,7 +666,7 @@ class FakeBem:
                              success=self.success, message="fake: no convergence"
                              if not self.success else "fake", V_over_U=1.2345,
                              dp_plus_R0=123.4, ell=3.21, film_min=0.0432, tension_front=6.5,
-                             shape_class="parachute")
+                             tension_max=7.5, shape_class="parachute")
 
 
 @pytest.fixture
@@ -645,8 +692,10 @@ def test_bem_rows_come_first_when_enabled_with_one_solve(fake_bem):
     assert (q["V_over_U"].value, q["dp_plus_R0"].value, q["ell"].value) == (1.2345, 123.4, 3.21)
     assert q["film"].value == 0.0432 and q["shape_class"].value == "parachute"
     assert q["tension_front"].value == pytest.approx(6.5 / 1.2345, rel=1e-15)   # eta V
+    assert q["tension_max"].value == pytest.approx(7.5 / 1.2345, rel=1e-15)
+    assert e["tension_max_etaU"] == pytest.approx(7.5, rel=1e-15)
     assert e["dp_plus_R"] == pytest.approx(123.4 / lam, rel=1e-15)
-    assert fake_bem.calls == [(nu, lam, 50.0)]          # one cached solve for six rows
+    assert fake_bem.calls == [(nu, lam, 50.0)]          # one cached solve for seven rows
     assert e.converged and not any("--solver bem" in n for n in e.notes)
 
 
@@ -657,12 +706,12 @@ def test_bem_precedes_the_lubrication_solver(fake_bem, monkeypatch):
         raise AssertionError("the lubrication solver ran although the BEM row was valid")
     monkeypatch.setattr(registry, "_lubrication_solution", never)
     e = estimate_dimensionless(*_near_critical(), 30.0, solvers=("lubrication", "bem"))
-    assert [e.quantities[k].method for k in BEM_QUANTITIES] == ["bem_vesicle"] * 6
+    assert [e.quantities[k].method for k in BEM_QUANTITIES] == ["bem_vesicle"] * 7
     assert fake_bem.calls[0][2] == 30.0                 # the case's Ca_B reaches the solver
 
 
 def test_bem_is_absent_unless_enabled_but_noted(fake_bem):
-    e = estimate_dimensionless(*_near_critical())
+    e = estimate_dimensionless(*_near_critical(), **NO_MAP)
     assert not any(q.method == "bem_vesicle" for q in e.quantities.values())
     assert e.quantities["V_over_U"].method == "near_critical_barakat2018a"
     assert any("--solver bem" in n and "minutes" in n for n in e.notes)
@@ -670,10 +719,10 @@ def test_bem_is_absent_unless_enabled_but_noted(fake_bem):
 
 
 def test_where_nothing_else_is_valid_the_bem_is_only_suggested(fake_bem):
-    e = estimate_dimensionless(0.9, 1.0)      # delta = 0.245: intermediate confinement
+    e = estimate_dimensionless(0.9, 1.0, **NO_MAP)   # delta = 0.245: intermediate confinement
     assert e["V_over_U"] is None and fake_bem.calls == []
     assert any(n.startswith("No closed-form") and "--solver bem" in n for n in e.notes)
-    solved = estimate_dimensionless(0.9, 1.0, solvers=("bem",))
+    solved = estimate_dimensionless(0.9, 1.0, solvers=("bem",), **NO_MAP)
     assert solved["V_over_U"] == 1.2345 and solved.quantities["V_over_U"].valid
     assert fake_bem.calls == [(0.9, 1.0, 50.0)]
 
@@ -689,9 +738,9 @@ def test_the_rbc_default_is_inside_the_bem_validated_range(fake_bem):
 
 
 def test_bem_outside_its_tested_range_is_neither_run_nor_noted(fake_bem):
-    e = estimate_dimensionless(*_near_critical(0.9, 0.99), solvers=())   # delta = 0.01 < 0.02
-    f = estimate_dimensionless(*_near_critical(0.5, 0.9), solvers=("bem",))  # nu < 0.6
-    g = estimate_dimensionless(*_near_critical(0.9, 0.99), solvers=("bem",))
+    e = estimate_dimensionless(*_near_critical(0.9, 0.99), solvers=(), **NO_MAP)   # delta 0.01
+    f = estimate_dimensionless(*_near_critical(0.5, 0.9), solvers=("bem",), **NO_MAP)  # nu < 0.6
+    g = estimate_dimensionless(*_near_critical(0.9, 0.99), solvers=("bem",), **NO_MAP)
     assert fake_bem.calls == []
     assert not any("bem" in n for n in e.notes + f.notes + g.notes)
     assert g.quantities["V_over_U"].method == "near_critical_barakat2018a"
@@ -700,7 +749,7 @@ def test_bem_outside_its_tested_range_is_neither_run_nor_noted(fake_bem):
 def test_bem_failure_is_reported_once_and_the_closed_forms_answer(fake_bem):
     fake_bem.success = False
     nu, lam = _near_critical()
-    e = estimate_dimensionless(nu, lam, solvers=("bem",))
+    e = estimate_dimensionless(nu, lam, solvers=("bem",), **NO_MAP)
     assert e.converged is False and e.to_dict()["converged"] is False
     assert any("bem solver was enabled but did not converge" in n and "fake" in n
                for n in e.notes)
@@ -732,7 +781,8 @@ class FakeLubrication:
     def __init__(self, raises=None, success=True, **values):
         self.raises, self.success, self.calls = raises, success, 0
         self.values = {"V_over_U": 1.0321, "dp_plus_R0": 321.0, "ell": 4.321, "film_min": 0.0321,
-                       "tension_front": 3.21, "shape_class": "bullet", **values}
+                       "tension_front": 3.21, "tension_max": 3.45, "shape_class": "bullet",
+                       **values}
 
     def __call__(self, nu, lam, *, ca_b):
         from types import SimpleNamespace
@@ -769,7 +819,7 @@ def fake_lubrication(monkeypatch):
 def test_a_failed_solver_gives_no_number_and_the_closed_forms_answer(fake_lubrication, kw, reason):
     solver = fake_lubrication(**kw)
     nu, lam = _near_critical()
-    e = estimate_dimensionless(nu, lam, solvers=("lubrication",))
+    e = estimate_dimensionless(nu, lam, solvers=("lubrication",), **NO_MAP)
     assert solver.calls == 1                            # the failure is cached, not retried
     assert e.converged is False
     d = e.to_dict()
@@ -782,7 +832,8 @@ def test_a_failed_solver_gives_no_number_and_the_closed_forms_answer(fake_lubric
 
 def test_where_only_the_failed_solver_applies_the_value_is_missing_with_the_reason(fake_lubrication):
     fake_lubrication(raises=RuntimeError("diverged"))
-    e = estimate_dimensionless(0.9, 0.8 * ref_lam_c(0.9), solvers=("lubrication",))   # delta 0.2
+    e = estimate_dimensionless(0.9, 0.8 * ref_lam_c(0.9), solvers=("lubrication",),   # delta 0.2
+                               **NO_MAP)
     q = e.quantities["V_over_U"]
     assert q.value is None and q.method is None and "diverged" in q.note
 
@@ -799,7 +850,8 @@ def test_the_cli_exits_1_with_the_fallback_numbers_named(fake_lubrication, capsy
     from correlations.cli import main
     fake_lubrication(success=False)
     nu, lam = _near_critical()
-    code = main(["estimate", "--nu", str(nu), "--lam", repr(lam), "--solver", "lubrication", "--json"])
+    code = main(["estimate", "--nu", str(nu), "--lam", repr(lam), "--solver", "lubrication",
+                 "--json", "--no-map"])
     captured = capsys.readouterr()
     obj = json.loads(captured.out)
     assert code == 1 and obj["converged"] is False

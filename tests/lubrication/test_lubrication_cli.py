@@ -113,7 +113,7 @@ def test_sweep_writes_csv_and_plot(capsys, tmp_path):
 def test_estimate_uses_the_solver_only_when_enabled():
     nu, ratio = 0.9, 0.97
     lam_c = registry.asymptotics.critical_confinement(nu)
-    plain = estimate_dimensionless(nu, ratio * lam_c)
+    plain = estimate_dimensionless(nu, ratio * lam_c, solution_map=False)   # closed forms only
     assert plain.quantities["V_over_U"].method == "near_critical_barakat2018a"
     assert any("--solver lubrication" in n for n in plain.notes)
     solved = estimate_dimensionless(nu, ratio * lam_c, solvers=("lubrication",))
@@ -139,7 +139,7 @@ def test_solver_failure_is_reported_not_hidden(monkeypatch):
     def fail(*args):
         raise registry.SolverNotConverged("lubrication solver did not converge: test")
     monkeypatch.setattr(registry, "_lubrication_solution", fail)
-    e = estimate(diameter_um=3.0, solvers=("lubrication",))
+    e = estimate(diameter_um=3.0, solvers=("lubrication",), solution_map=False)
     assert e.converged is False and e.to_dict()["converged"] is False
     assert any("did not converge" in n for n in e.notes)
     # The closed forms still answer where they are valid (3 um: near-critical).
