@@ -39,6 +39,7 @@ import numpy as np
 from lubrication.checks import (CannotPassError, InvalidParameterError, OutOfRangeWarning,
                                 check_choice, check_fraction, check_positive, check_range)
 from lubrication.cli_contract import format_value_error
+from lubrication.io import provenance
 from lubrication.geometry import (cell_from_volume_area, check_passes, check_reduced_volume,
                                   critical_diameter_um,
                                   critical_length, critical_length_um)
@@ -268,12 +269,6 @@ def _regime(lam: float, delta: float) -> str:
     return "intermediate confinement (no closed-form law is established here)"
 
 
-def _provenance() -> dict:
-    import numpy
-    from lubrication import __version__
-    return {"package": "vesicle-tube", "version": __version__, "numpy": numpy.__version__}
-
-
 def _scalar(name: str, x):
     """``x`` itself if it is a single number (or None); the estimate is computed for one case."""
     if x is not None and not isinstance(x, str) and np.ndim(x) != 0:
@@ -403,7 +398,7 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
     quantities["ca_b"] = _ca_b_quantity(ca_b, solvers, log)
     inputs = {"nu": nu, "lam": lam, "ca_b": ca_b, **hematocrits}
     return Estimate(inputs=inputs, quantities=quantities, regime=_regime(lam, state["delta"]),
-                    notes=_notes(quantities, ca_b, log), provenance=_provenance(),
+                    notes=_notes(quantities, ca_b, log), provenance=provenance(),
                     converged=not log.get("failures"))
 
 
@@ -596,4 +591,4 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
             notes.append(f"{name} tension {value} mN/m{flag} is {verdict} the bilayer rupture "
                          f"(lysis) range {lo:g}-{hi:g} mN/m.")
     return Estimate(inputs=inputs, quantities={**q, **physical}, regime=_regime(lam, state["delta"]),
-                    notes=tuple(notes), provenance=_provenance(), converged=not log.get("failures"))
+                    notes=tuple(notes), provenance=provenance(), converged=not log.get("failures"))

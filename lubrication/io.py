@@ -29,6 +29,7 @@ import math
 import os
 import platform
 import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -144,38 +145,37 @@ def save_result(directory, stem: str, data: dict, columns, profiles) -> tuple[Pa
 
 
 @functools.cache
-def _versions() -> tuple:
-    """(name, version) of the package, its numerical dependencies and Python, and the git
-    commit of the source tree ("unknown" outside a git checkout): fixed for a process."""
-    from importlib import metadata
-
-    from . import __version__
-
-    out = [("vesicle-tube", __version__), ("python", platform.python_version())]
-    for name in ("numpy", "scipy", "numba"):
-        try:
-            out.append((name, metadata.version(name)))
-        except metadata.PackageNotFoundError:       # pragma: no cover - not installed
-            out.append((name, "unknown"))
+def _git_commit() -> str:
+    """The git commit of the source tree, "unknown" outside a git checkout (once a process)."""
     try:
         git = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
                              capture_output=True, text=True, timeout=5, check=False)
-        commit = git.stdout.strip() or "unknown"
+        return git.stdout.strip() or "unknown"
     except (OSError, subprocess.SubprocessError):
-        commit = "unknown"
-    out.append(("git_commit", commit))
-    return tuple(out)
+        return "unknown"
 
 
 def provenance() -> dict:
-    """Where a result comes from: ``vesicle-tube`` (the package version), ``python``,
-    ``numpy``, ``scipy``, ``numba`` (versions), ``git_commit`` (of the source tree, "unknown"
-    outside a git checkout) and ``date`` (now, UTC, ISO 8601 to the second).
+    """Where a result comes from: ``vesicle-tube`` (the package version), ``python``, the
+    versions of those of ``numpy``, ``scipy`` and ``numba`` that this process has loaded (the
+    libraries the result can depend on; read from the modules, since a metadata lookup of
+    packages not loaded costs tens of ms and the estimate's start-up must stay light),
+    ``git_commit`` (of the source tree, "unknown" outside a git checkout) and ``date`` (now,
+    UTC, ISO 8601 to the second).
 
     Examples
     --------
-    >>> sorted(provenance())
-    ['date', 'git_commit', 'numba', 'numpy', 'python', 'scipy', 'vesicle-tube']
+    >>> import numpy
+    >>> {"vesicle-tube", "python", "numpy", "git_commit", "date"} <= set(provenance())
+    True
     """
-    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    return {**dict(_versions()), "date": now}
+    from . import __version__
+
+    out = {"vesicle-tube": __version__, "python": platform.python_version()}
+    for name in ("numpy", "scipy", "numba"):
+        version = getattr(sys.modules.get(name), "__version__", None)
+        if version is not None:
+            out[name] = version
+    out["git_commit"] = _git_commit()
+    out["date"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    return out
