@@ -129,7 +129,7 @@ def test_estimate_uses_the_solver_only_when_enabled():
 
 
 def test_solver_outside_its_range_is_not_used():
-    # delta = 0.5 > 0.3: outside LUBRICATION_RANGE, nothing runs, no note about the solver.
+    # delta = 0.5 > 0.05: outside LUBRICATION_RANGE, nothing runs, no note about the solver.
     e = estimate_dimensionless(0.9, 0.5 * registry.asymptotics.critical_confinement(0.9),
                                solvers=("lubrication",))
     assert e.quantities["V_over_U"].method != "lubrication_solver"
@@ -139,10 +139,10 @@ def test_solver_failure_is_reported_not_hidden(monkeypatch):
     def fail(*args):
         raise registry.SolverNotConverged("lubrication solver did not converge: test")
     monkeypatch.setattr(registry, "_lubrication_solution", fail)
-    e = estimate(diameter_um=3.0, solvers=("lubrication",), solution_map=False)
+    e = estimate(diameter_um=2.9, solvers=("lubrication",), solution_map=False)
     assert e.converged is False and e.to_dict()["converged"] is False
     assert any("did not converge" in n for n in e.notes)
-    # The closed forms still answer where they are valid (3 um: near-critical).
+    # The closed forms still answer where they are valid (2.9 um: near-critical, delta = 0.02).
     assert e.quantities["V_over_U"].method == "near_critical_barakat2018a"
 
 
@@ -155,7 +155,7 @@ def test_estimate_cli_exits_1_when_the_enabled_solver_fails(capsys, monkeypatch)
     def fail(*args):
         raise registry.SolverNotConverged("lubrication solver did not converge: test")
     monkeypatch.setattr(registry, "_lubrication_solution", fail)
-    code, out, _ = run(capsys, "estimate", "--diameter-um", "3", "--solver", "lubrication", "--json")
+    code, out, _ = run(capsys, "estimate", "--diameter-um", "2.9", "--solver", "lubrication", "--json")
     assert code == 1 and json.loads(out)["converged"] is False
 
 
