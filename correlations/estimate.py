@@ -49,7 +49,7 @@ from .registry import (BEM_DEFAULT_CA_B, LUBRICATION_DEFAULT_CA_B, MAP, MAP_DEFA
                        SolverNotConverged, check_output)
 
 __all__ = ["RBC_DEFAULTS", "PHYSICAL_BOUNDS", "RUPTURE_TENSION_MN_M", "UNITS", "Quantity",
-           "Estimate", "estimate", "estimate_dimensionless"]
+           "Estimate", "estimate", "estimate_dimensionless", "physical_scales"]
 
 RBC_DEFAULTS = {
     "volume_fl": 90.0,            # Evans & Fung 1972 (mean corpuscular volume ~90 fL)
@@ -482,6 +482,43 @@ def _notes(quantities: dict, ca_b, log: dict) -> tuple:
     return tuple(notes)
 
 
+def physical_scales(R0_um: float, diameter_um: float, velocity_mm_s: float | None = None,
+                    plasma_viscosity_mpas: float | None = None,
+                    bending_modulus_j: float | None = None) -> dict:
+    r"""The physical value of one unit of each dimensionless quantity, and Ca_B.
+
+    With R0 the volume radius, R = d/2 the tube radius, U the mean velocity, η the viscosity and
+    κ the bending modulus (the scalings of the module docstring): ``V_mm_s`` = U [mm/s] (V/U
+    → V), ``dp_plus_Pa`` = ηU/R0 [Pa] (Δp⁺R0/(ηU) → Δp⁺), ``film_nm`` = R [nm] (h/R → h),
+    ``length_um`` = R [µm] (L/R → L), ``tension_mN_m`` = ηU [mN/m] (γ/(ηU) → γ) and ``ca_b``
+    = ηUR0²/κ (Chen et al. 2020 §II). A key whose inputs are not given is left out. Inputs are
+    taken as checked (positive and finite).
+
+    Parameters
+    ----------
+    R0_um, diameter_um : float
+        Volume radius and tube diameter [µm].
+    velocity_mm_s, plasma_viscosity_mpas, bending_modulus_j : float, optional
+        U [mm/s], η [mPa·s], κ [J].
+
+    Examples
+    --------
+    >>> s = physical_scales(2.78, 4.0, 1.0, 1.2, 2e-19)
+    >>> s["film_nm"], round(s["dp_plus_Pa"], 4), round(s["ca_b"], 2)
+    (2000.0, 0.4317, 46.37)
+    """
+    R0_m, R_m = R0_um * 1e-6, diameter_um / 2 * 1e-6
+    out = {"film_nm": R_m * 1e9, "length_um": R_m * 1e6}
+    if velocity_mm_s is not None:
+        out["V_mm_s"] = float(velocity_mm_s)
+        if plasma_viscosity_mpas is not None:
+            eta_U = plasma_viscosity_mpas * 1e-3 * velocity_mm_s * 1e-3     # [Pa m]
+            out.update(dp_plus_Pa=eta_U / R0_m, tension_mN_m=eta_U * 1e3)
+            if bending_modulus_j is not None:
+                out["ca_b"] = eta_U * R0_m**2 / bending_modulus_j
+    return out
+
+
 def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
              area_um2: float = RBC_DEFAULTS["area_um2"],
              diameter_um: float = RBC_DEFAULTS["diameter_um"],
@@ -555,8 +592,8 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
         raise CannotPassError("diameter_um", diameter_um, f"diameter_um > d_c = {d_c:.4g} um",
                               f"the cell (nu={nu:.3g}, R0={R0:.3g} um) cannot pass this tube intact")
     lam = 2.0 * R0 / diameter_um
-    R0_m, R_m = R0 * 1e-6, diameter_um / 2 * 1e-6
-    ca_b = eta * U * R0_m**2 / kappa
+    scale = physical_scales(R0, diameter_um, velocity_mm_s, plasma_viscosity_mpas, kappa)
+    ca_b = scale["ca_b"]
     hematocrits = {}
     if hematocrit is not None:
         hematocrits[f"{kind}_hematocrit"] = float(check_fraction("hematocrit", hematocrit))
@@ -571,12 +608,12 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     physical = {"R0_um": Quantity(R0, "um", geo, True), "d_c_um": Quantity(d_c, "um", geo, True),
                 "L_c_um": Quantity(critical_length_um(nu, R0), "um", geo, True),
                 "ca_b": Quantity(ca_b, "-", "eta U R0^2/kappa (from the inputs)", True)}
-    physical.update(V_mm_s=_scaled(q["V_over_U"], U * 1e3, "mm/s"),
-                    dp_plus_Pa=_scaled(q["dp_plus_R0"], eta * U / R0_m, "Pa"),
-                    film_nm=_scaled(q["film"], R_m * 1e9, "nm"),
-                    length_um=_scaled(q["ell"], R_m * 1e6, "um"),
+    physical.update(V_mm_s=_scaled(q["V_over_U"], scale["V_mm_s"], "mm/s"),
+                    dp_plus_Pa=_scaled(q["dp_plus_R0"], scale["dp_plus_Pa"], "Pa"),
+                    film_nm=_scaled(q["film"], scale["film_nm"], "nm"),
+                    length_um=_scaled(q["ell"], scale["length_um"], "um"),
                     # gamma = (gamma/(eta V)) eta (V/U) U, in mN/m
-                    **{f"{t}_mN_m": _scaled(q[t], eta * U * 1e3, "mN/m", q["V_over_U"])
+                    **{f"{t}_mN_m": _scaled(q[t], scale["tension_mN_m"], "mN/m", q["V_over_U"])
                        for t in ("tension_front", "tension_max")})
     notes = list(_notes(q, ca_b, log))
     for name, key in (("Front", "tension_front_mN_m"), ("Maximum", "tension_max_mN_m")):
