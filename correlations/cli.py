@@ -17,8 +17,10 @@ import warnings
 
 from lubrication.checks import (InvalidParameterError, OutOfRangeWarning, check_fraction,
                                 check_positive, check_range)
-from lubrication.cli_contract import (EXIT_INTERRUPTED, EXIT_INVALID, EXIT_NOT_CONVERGED, EXIT_OK,
+from lubrication.cli_contract import (EXIT_CHECK_FAILED, EXIT_INTERRUPTED, EXIT_INVALID,
+                                      EXIT_NOT_CONVERGED, EXIT_OK,
                                       Parser, UsageError, check_output_dir, check_plot_path,
+                                      check_report_path,
                                       dump_json, format_rows, format_value_error,
                                       interrupted_message,
                                       non_finite_keys, one_line, options_named,
@@ -399,6 +401,7 @@ def build_parser() -> argparse.ArgumentParser:
     from bem.cli import add_bem_parser                          # light: numba loads on use
     add_bem_parser(sub)
     from .map_cli import add_map_parser; add_map_parser(sub)   # light: solvers load on use
+    from .check_cli import add_check_parser; add_check_parser(sub)   # light: loads on use
     return p
 
 
@@ -409,10 +412,11 @@ def _prog(args) -> str:
 
 
 def _check_outputs(args) -> None:
-    """Every output option is checked before any work: the folder of ``--out`` and the folder
-    and format of ``--plot``."""
+    """Every output option is checked before any work: the folder of ``--out``, the folder
+    and format of ``--plot`` and of ``--report``."""
     check_output_dir("--out", getattr(args, "out", None))
     check_plot_path("--plot", getattr(args, "plot", None))
+    check_report_path("--report", getattr(args, "report", None))
 
 
 # Result keys of every command checked against the physical bounds
@@ -476,6 +480,8 @@ def _run(args) -> int:
     converged = out.get("converged", True)
     if not converged and out.get("message"):
         print(f"{prog}: not converged: {out['message']}", file=sys.stderr)
+    if out.get("command") == "check" and out.get("verdict") == "fail":
+        return EXIT_CHECK_FAILED
     return EXIT_OK if converged else EXIT_NOT_CONVERGED
 
 

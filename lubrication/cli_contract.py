@@ -3,12 +3,13 @@
 ``vesicle-tube COMMAND [options] [--json]``: people get a table with units, ``--json`` prints one
 strict JSON object on stdout (no NaN, no Infinity). Exit status:
 
-* 0 success, every number finite;
+* 0 success, every number finite (``check``: no row failed; warnings allowed);
 * 2 invalid input: one line on stderr naming the option, its value and the valid range, printed
   before any expensive work (numbers, combinations, output folders and plot formats included);
 * 1 a solver did not converge or stopped at its resource limit: a message on stderr; with
   ``--json`` the object is still printed with ``"converged": false`` and without the physical
-  numbers of the failed solve;
+  numbers of the failed solve; for ``check``, a row failed a check (:data:`EXIT_CHECK_FAILED`,
+  the table or ``--json`` printed as usual);
 * 130 interrupted (Ctrl-C): one line naming the files already written (each complete);
 * 141 stdout closed early (``... | head``): quiet.
 
@@ -31,11 +32,12 @@ from pathlib import Path
 from . import io
 
 EXIT_OK, EXIT_NOT_CONVERGED, EXIT_INVALID = 0, 1, 2
+EXIT_CHECK_FAILED = 1       # vesicle-tube check: a row failed (module docstring)
 EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 130, 141
 
 __all__ = ["EXIT_OK", "EXIT_NOT_CONVERGED", "EXIT_INVALID", "EXIT_INTERRUPTED",
-           "EXIT_BROKEN_PIPE", "UsageError", "Parser", "format_rows", "format_value",
-           "format_value_error",
+           "EXIT_BROKEN_PIPE", "EXIT_CHECK_FAILED", "UsageError", "Parser", "format_rows",
+           "format_value", "format_value_error", "REPORT_FORMATS", "check_report_path",
            "check_output_dir", "check_plot_path", "save_plot", "non_finite_keys", "dump_json",
            "finite_float", "positive_int", "add_max_time_option", "one_line", "options_named"]
 
@@ -144,28 +146,46 @@ def _plot_formats() -> dict:
     return FigureCanvasBase.get_supported_filetypes()
 
 
-def check_plot_path(option: str, path) -> Path:
-    """Check a figure file option (``--plot FILE``) before any work: its extension is a format
-    matplotlib writes (no extension: PNG), it is not a folder, and its folder exists and is
-    writable. Returns the path."""
+def _check_file_path(option: str, path, what: str, formats, example: str,
+                     optional_extension: bool) -> Path:
+    """An output file option checked before any work: its extension is one of ``formats``
+    (none allowed when ``optional_extension``), it is not a folder, and its folder exists and
+    is writable."""
     if path is None:
         return None
     if str(path).strip() == "":
         raise UsageError(f"{option}: the file name is empty")
     p = Path(path)
     ext = p.suffix.lstrip(".").lower()
-    if ext:
-        formats = _plot_formats()
-        if ext not in formats:
-            raise UsageError(f"{option} {path}: unknown figure format {ext!r}; valid: "
-                             + ", ".join(sorted(formats)))
+    if (ext or not optional_extension) and ext not in formats:
+        raise UsageError(f"{option} {path}: unknown {what} format {ext!r}; valid: "
+                         + ", ".join(sorted(formats)))
     if p.is_dir() or str(path).endswith(os.sep):
         raise UsageError(f"{option} {path}: this is a folder; give a file name, e.g. "
-                         f"{os.path.join(str(path), 'figure.png')}")
+                         f"{os.path.join(str(path), example)}")
     if not p.parent.is_dir():
         raise UsageError(f"{option} {path}: the folder {str(p.parent)!r} does not exist")
     _writable_folder(option, p.parent, str(path))
     return p
+
+
+def check_plot_path(option: str, path) -> Path:
+    """Check a figure file option (``--plot FILE``) before any work: its extension is a format
+    matplotlib writes (no extension: PNG), it is not a folder, and its folder exists and is
+    writable. Returns the path."""
+    return _check_file_path(option, path, "figure", _plot_formats() if path else (),
+                            "figure.png", optional_extension=True)
+
+
+#: Formats of a written report, by extension.
+REPORT_FORMATS = {"md": "Markdown", "markdown": "Markdown", "html": "HTML", "htm": "HTML"}
+
+
+def check_report_path(option: str, path) -> Path:
+    """Check a report file option (``--report FILE.md|FILE.html``) before any work, as
+    :func:`check_plot_path` (the extension is required: one of :data:`REPORT_FORMATS`)."""
+    return _check_file_path(option, path, "report", REPORT_FORMATS, "report.md",
+                            optional_extension=False)
 
 
 def save_plot(ax, path) -> Path:

@@ -1,0 +1,1298 @@
+r"""Consistency check of steady results for a sphere, a drop or a vesicle in tube flow.
+
+Users with their own results (BEM, lattice Boltzmann, DPD, immersed boundary, experiments) give
+one row per steady state; every row is checked against the physics and against references of
+known accuracy, each check with a verdict (pass, warn, fail) and the tolerance it used.
+
+Scalings (project conventions): R0 volume radius, R tube radius, λ = R0/R (``lam``), λc(ν)
+the critical confinement (Chen et al. 2020 eq. critic), δ = 1 − λ/λc, U the **mean** velocity
+of the undisturbed Poiseuille flow (centreline 2U), V/U (``V_over_U``), Δp⁺R0/(ηU)
+(``dp_plus_R0``) or Δp⁺R/(ηU) (``dp_plus_R``), ℓ = L/R (``ell``), smallest gap h/R
+(``film_min``), Ca_B = ηUR0²/κ (``ca_b``, vesicles), Ca = ηU/γ (``ca``, drops of viscosity
+ratio 1). Columns with physical units carry the unit in their name (:data:`COLUMNS`) and are
+converted with :func:`correlations.estimate.physical_scales` and
+:func:`lubrication.geometry.cell_from_volume_area`.
+
+Input
+-----
+:func:`read_rows` reads a CSV file (header row, comma separated), a JSON file (a list of
+objects or ``{"rows": [...]}``) or a list of dicts; :func:`parse_row` turns one row into a
+checked :class:`Row` of dimensionless values. An empty cell or null means "not given". Bad input
+(malformed file, unknown or missing column, a number that is not one, a dimensional column
+without what converts it, a column that does not apply to the row's ``kind``) raises
+:class:`InputError` naming the row and the column: nothing is checked silently.
+
+Checks, in the order they are made (module constants hold the measured numbers)
+---------------------------------------------------------------------------------
+1. **Hard bounds** (verdict fail when violated by more than the row's uncertainty, warn when
+   within it): λ < λc(ν) (vesicle; λ < 1 for a rigid sphere; none for a drop, which deforms
+   into a slug); 1 ≤ V/U < 2 (between the mean and the centreline velocity,
+   :data:`lubrication.checks.OUTPUT_BOUNDS`); Δp⁺ > 0 (extra dissipation of a force-free
+   object at fixed flow rate); 0 < h/R ≤ δ for a vesicle (:func:`film_upper_bound`) and
+   h/R ≥ 1 − √2 λ_A (:func:`film_lower_bound`); ℓ ≥ (4/3)λ³/(1 − h/R)²
+   (:func:`length_lower_bound`).
+2. **References**, the most accurate one available for each quantity: for a vesicle the
+   solution map (:func:`map_reference`), else the near-critical asymptotics (δ ≤ 0.1,
+   :func:`near_critical_reference`), else the small rigid sphere (λ ≤ 0.5, ν ≥ 0.9,
+   :func:`small_object_reference`); for a rigid sphere (and a vesicle of ν = 1, which cannot
+   deform) the BEM (:func:`bem.solve.solve_sphere`), else the small-sphere law; for a drop the
+   BEM (:func:`bem.drop.solve_drop`, needs ``ca``), else the small-drop law. The BEM solves
+   take about a second each, are made only for rows that need them, cached per (λ, Ca) and
+   skipped with ``bem=False``.
+3. **Relations between columns** that hold whatever the method: Δp⁺R0 = λ Δp⁺R when both are
+   given; near λc Chen et al.'s Δp⁺R0/(ηU) ≈ (3/2)λℓ/δ (:func:`chen_film_scaling_check`); the
+   volume and the area of the spherocylinder of the reported ℓ and h
+   (:func:`shape_volume_area_checks`), which see a volume drift of 1 % near λc.
+4. **Series** (rows of one kind sharing ν and Ca_B, sorted by λ): V/U decreases, Δp⁺R0
+   increases (:func:`trend_checks`); the shape class against the solution map or the
+   transition line of Chen et al. (:func:`shape_class_check`).
+
+Tolerance and verdict
+---------------------
+A reference check has deviation = value − reference and tolerance = reference error + the
+row's uncertainty: the linear sum (both are treated as bounds, as the map adds its own error
+parts), so that two results that are each within their stated error never fail. The row's
+uncertainty of a value is its ``<column>_err`` cell when given (absolute, same unit), else
+half a unit of the last digit written (a value written "1.4218" is known to ±5e-5). Verdict:
+pass when |deviation| ≤ tolerance, warn when ≤ :data:`WARN_FACTOR` × tolerance, fail beyond.
+The row's verdict is its worst check; the report's, its worst row.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import decimal
+import difflib
+import enum
+import functools
+import json
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+from lubrication.checks import InvalidParameterError, OutOfRangeWarning, check_range
+from lubrication.geometry import (cell_from_volume_area, check_reduced_volume,
+                                  confinement_from_diameter, critical_confinement, volume_radius)
+
+__all__ = ["COLUMNS", "ERROR_COLUMNS", "KINDS", "WARN_FACTOR", "Verdict", "InputError", "Row",
+           "Reference", "CheckResult", "RowReport", "CheckReport", "read_rows", "parse_row",
+           "parse_rows", "map_reference", "near_critical_reference", "small_object_reference",
+           "sphere_reference", "drop_reference", "film_upper_bound", "film_lower_bound",
+           "length_lower_bound", "chen_film_scaling_check", "shape_volume_area_checks",
+           "trend_checks", "shape_class_check", "check_results", "assert_consistent"]
+
+KINDS = ("vesicle", "sphere", "drop")
+
+#: Every column a row may have: name -> (role, meaning with unit). Roles: ``text``; ``input``
+#: (a parameter of the case); ``output`` (a result, checked); ``physical`` (an input with a
+#: unit, converted); ``physical output`` (a result with a unit, converted and checked).
+COLUMNS = {
+    "name": ("text", "label of the row"),
+    "kind": ("text", "vesicle (default), sphere (rigid) or drop (clean, viscosity ratio 1)"),
+    "nu": ("input", "reduced volume 6 sqrt(pi) Omega A^(-3/2) [-] (vesicle)"),
+    "lam": ("input", "confinement R0/R [-]"),
+    "ca_b": ("input", "bending capillary number eta U R0^2/kappa [-] (vesicle)"),
+    "ca": ("input", "capillary number eta U/gamma [-] (drop)"),
+    "V_over_U": ("output", "velocity over the mean velocity of the undisturbed flow [-]"),
+    "dp_plus_R0": ("output", "extra pressure drop dp+ R0/(eta U) [-]"),
+    "dp_plus_R": ("output", "extra pressure drop dp+ R/(eta U) [-]"),
+    "ell": ("output", "length L/R [-]"),
+    "film_min": ("output", "smallest gap between the object and the wall h/R [-]"),
+    "shape_class": ("text", "bullet or parachute (vesicle)"),
+    "diameter_um": ("physical", "tube diameter d = 2R [um]"),
+    "volume_fl": ("physical", "volume [fL = um^3]"),
+    "area_um2": ("physical", "membrane area [um^2] (vesicle)"),
+    "U_mm_s": ("physical", "mean velocity U of the undisturbed flow [mm/s]"),
+    "eta_mpas": ("physical", "viscosity of the suspending fluid [mPa s]"),
+    "kappa_j": ("physical", "bending modulus [J] (vesicle)"),
+    "V_mm_s": ("physical output", "velocity V [mm/s]"),
+    "dp_plus_Pa": ("physical output", "extra pressure drop dp+ [Pa]"),
+    "length_um": ("physical output", "length L [um]"),
+    "film_nm": ("physical output", "smallest gap h [nm]"),
+}
+#: ``<column>_err``: the absolute uncertainty of an output column, in its unit.
+ERROR_COLUMNS = {f"{c}_err": f"uncertainty of {c} (absolute, same unit)"
+                 for c, (role, _) in COLUMNS.items() if role in ("output", "physical output")}
+
+#: Columns that apply to one kind only (the others refuse them: nothing is ignored silently).
+_ONLY_FOR = {"nu": ("vesicle", "sphere"), "area_um2": ("vesicle",), "ca_b": ("vesicle",),
+             "kappa_j": ("vesicle",), "shape_class": ("vesicle",), "ca": ("drop",)}
+#: The physical inputs and the name of their accepted range in estimate.PHYSICAL_BOUNDS.
+_PHYSICAL_INPUTS = {"volume_fl": "volume_fl", "diameter_um": "diameter_um",
+                    "U_mm_s": "velocity_mm_s", "eta_mpas": "plasma_viscosity_mpas",
+                    "kappa_j": "bending_modulus_j", "area_um2": None}
+#: Results given in physical units: dimensionless quantity <- (column, physical_scales key).
+_CONVERTED = {"V_over_U": "V_mm_s", "dp_plus_R0": "dp_plus_Pa", "ell": "length_um",
+              "film_min": "film_nm"}
+#: What each conversion needs besides its column, for the message when it is missing.
+_NEEDS = {"V_mm_s": "U_mm_s", "dp_plus_Pa": "U_mm_s, eta_mpas and the volume radius (volume_fl, "
+          "or lam with diameter_um)", "length_um": "the tube diameter (diameter_um, or lam "
+          "with volume_fl)", "film_nm": "the tube diameter (diameter_um, or lam with volume_fl)"}
+
+#: verdict factor: warn up to this many tolerances, fail beyond
+WARN_FACTOR = 3.0
+
+# ---- tolerances of the references (measured numbers: tests/correlations/test_check.py checks
+# ---- that our own converged solutions pass with them)
+#: Stand-in relative solver error of a map value whose solver part is unknown (ell, film_min and
+#: the lubrication points carry none): the refinement tolerance tol = 1e-4 of
+#: bem.vesicle.solve_vesicle with which the map points are built (map_build.DEFAULT_OPTIONS).
+MAP_UNKNOWN_SOLVER_RTOL = 1e-4
+#: Ca_B at which the map is queried when a vesicle row gives none (Chen et al. 2020's value).
+DEFAULT_CA_B = 50.0
+#: eq. asmyp1: the error is the slope's difference from the lubrication slope 1 (physics notes
+#: §4) plus the next term K δ^(3/2) of V/U = 1 + δ − kδ^(3/2); k ≤ 2.0 measured on every
+#: converged map point with δ ≤ 0.1 (ν 0.6-0.98, Ca_B 5-500, BEM and lubrication).
+NEAR_CRITICAL_SPEED_K = 2.5
+#: eq. asmyp2: its O(1) remainder is in fact O(λδ^(-1/2)) (the printed δ^(-1/2) coefficient is
+#: too small): |Δp⁺R0/(ηU) − asmyp2| ≤ 20.6 λδ^(-1/2) measured as above; K λ δ^(-1/2) is used.
+NEAR_CRITICAL_DP_K = 25.0
+#: Chen et al. 2020 fig. dpa_film, Δp⁺R0/(ηU) ≈ (3/2)λℓ/δ with δ = 1 − λ/λc: our converged
+#: solutions give 0.884-1.311 times it for 0.02 <= δ <= 0.1 (ν 0.6-0.98, Ca_B 5-500); it
+#: leaves that band below δ = 0.02 (0.35 at ν = 0.98, δ = 1e-4).
+CHEN_FILM_SCALING_RANGE = (0.02, 0.1)
+CHEN_FILM_SCALING_RTOL = 0.35
+#: Spherocylinder of radius 1 − h/R and length ℓ near λc: its volume over the vesicle's is
+#: 1 + ε_V, its area over the vesicle's 1 + ε_A; measured on every converged map point with
+#: δ <= 0.05: 0.31δ <= ε_V <= 0.55δ and 0.11δ <= ε_A <= 0.31δ (the caps are not hemispheres,
+#: the film not uniform). Stored as (centre, half-width) in units of δ, each band widened by
+#: 0.05δ on both sides.
+SHAPE_RANGE_DELTA = 0.05
+SHAPE_VOLUME_BAND = (0.43, 0.17)
+SHAPE_AREA_BAND = (0.21, 0.15)
+#: The transition line of Chen et al. 2020 lies within 0.05 in ν of the parachute-bullet
+#: brackets of our map (lines at Ca_B = 15 and 50): a class disagreeing with the line closer
+#: than this is a warning, not a failure.
+TRANSITION_BAND_NU = 0.05
+#: Small clean drop (Hetsroni et al. 1970, viscosity ratio 1): |V/U − (2 − 0.8λ²)| <= 0.48λ⁵ and
+#: |Δp⁺/(4.8λ⁶) − 1| <= 2.7λ⁵ measured with our BEM for λ <= 0.5 and Ca <= 0.5 (the drop
+#: deforms at larger Ca: −18.6λ⁵ at Ca = 1, λ = 0.2).
+SMALL_DROP_CA_MAX = 0.5
+SMALL_DROP_SPEED_K, SMALL_DROP_DP_K = 1.0, 3.0
+
+
+class Verdict(enum.Enum):
+    """Outcome of a check, in increasing severity."""
+    PASS = "pass"
+    WARN = "warn"
+    FAIL = "fail"
+
+    @property
+    def rank(self) -> int:
+        return ("pass", "warn", "fail").index(self.value)
+
+
+def _worst(verdicts) -> Verdict:
+    return max(verdicts, key=lambda v: v.rank, default=Verdict.PASS)
+
+
+def _verdict(deviation: float, tolerance: float) -> Verdict:
+    """Pass within one tolerance, warn within :data:`WARN_FACTOR`, fail beyond."""
+    if tolerance <= 0.0:
+        return Verdict.PASS if deviation == 0.0 else Verdict.FAIL
+    r = abs(deviation) / tolerance
+    return Verdict.PASS if r <= 1.0 else Verdict.WARN if r <= WARN_FACTOR else Verdict.FAIL
+
+
+class InputError(InvalidParameterError):
+    """A row, a column or the whole input cannot be read (the message names where)."""
+
+    def __init__(self, where: str, column: str, value, expected: str, reason: str = ""):
+        what = "missing" if value is None else f"{value!r} is invalid"
+        ValueError.__init__(self, f"{where}, column {column!r}: {what}: expected {expected}"
+                            + (f"; {reason}" if reason else ""))
+        self.name, self.value, self.valid, self.where = column, value, expected, where
+
+
+# --------------------------------------------------------------------------- reading rows
+
+def _suggest(name: str) -> str:
+    close = difflib.get_close_matches(name, [*COLUMNS, *ERROR_COLUMNS], n=1, cutoff=0.6)
+    return f"did you mean {close[0]!r}? " if close else ""
+
+
+def _unknown_column(where: str, name: str) -> InputError:
+    return InputError(where, name, name, "a known column",
+                      _suggest(name) + "known: " + ", ".join(COLUMNS) + " and <output>_err "
+                      "(units are part of the name: diameter_um, volume_fl, area_um2, U_mm_s, "
+                      "eta_mpas, kappa_j, V_mm_s, dp_plus_Pa, length_um, film_nm)")
+
+
+def _read_csv(path: Path) -> list[tuple[str, dict]]:
+    try:
+        with path.open(encoding="utf-8-sig", newline="") as f:
+            lines = list(csv.reader(f))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(str(path), "FILE", str(path), "a readable UTF-8 CSV file",
+                         str(exc)) from None
+    numbered = [(i + 1, cells) for i, cells in enumerate(lines) if any(c.strip() for c in cells)]
+    if not numbered:
+        raise InputError(str(path), "FILE", str(path), "a header row and data rows",
+                         "the file is empty")
+    line, header = numbered[0]
+    header = [h.strip() for h in header]
+    for k, h in enumerate(header):
+        if not h:
+            raise InputError(f"{path} header (line {line})", f"#{k + 1}", h,
+                             "a column name", "empty column name")
+        if header.count(h) > 1:
+            raise InputError(f"{path} header (line {line})", h, h, "each column once",
+                             "repeated column")
+    if len(header) == 1 and (";" in header[0] or "\t" in header[0]):
+        raise InputError(f"{path} header (line {line})", header[0], header[0],
+                         "comma-separated columns", "the separator must be a comma")
+    rows = []
+    for n, (line, cells) in enumerate(numbered[1:], 1):
+        if len(cells) != len(header):
+            raise InputError(f"row {n} (line {line})", "*", f"{len(cells)} cells",
+                             f"{len(header)} cells, one per header column")
+        rows.append((f"row {n} (line {line})", dict(zip(header, cells))))
+    if not rows:
+        raise InputError(str(path), "FILE", str(path), "data rows after the header",
+                         "no data rows")
+    return rows
+
+
+def _read_json(path: Path) -> list[tuple[str, dict]]:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8-sig"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputError(str(path), "FILE", str(path), "a readable JSON file", str(exc)) from None
+    if isinstance(data, dict) and set(data) >= {"rows"}:
+        data = data["rows"]
+    if not isinstance(data, list):
+        raise InputError(str(path), "FILE", str(path), 'a list of objects or {"rows": [...]}',
+                         f"the top level is a {type(data).__name__}")
+    return _from_list(data, str(path))
+
+
+def _from_list(data, source: str) -> list[tuple[str, dict]]:
+    if not data:
+        raise InputError(source, "rows", "[]", "at least one row")
+    rows = []
+    for n, row in enumerate(data, 1):
+        if not isinstance(row, dict):
+            raise InputError(f"row {n}", "*", type(row).__name__, "an object of column: value")
+        rows.append((f"row {n}", row))
+    return rows
+
+
+def read_rows(source) -> tuple[list[tuple[str, dict]], str]:
+    """The raw rows of ``source`` and a description of it.
+
+    ``source``: a CSV file (``.csv``; header row, comma-separated), a JSON file (``.json``: a
+    list of objects or ``{"rows": [...]}``; another extension is read as JSON if it starts with
+    ``[`` or ``{``, else as CSV), or a list of dicts. Returns ``([(where, cells), ...],
+    description)`` with ``where`` naming the row (and the line of a CSV file) for messages.
+    Raises :class:`InputError` for an unreadable or malformed file.
+    """
+    if isinstance(source, (list, tuple)):
+        return _from_list(list(source), "rows"), f"{len(source)} rows given in Python"
+    path = Path(source)
+    if not path.is_file():
+        raise InputError(str(path), "FILE", str(path), "an existing CSV or JSON file",
+                         "no such file" if not path.exists() else "not a file")
+    suffix = path.suffix.lower()
+    if suffix not in (".csv", ".json"):
+        try:
+            head = path.read_text(encoding="utf-8-sig").lstrip()[:1]
+        except (OSError, UnicodeDecodeError) as exc:
+            raise InputError(str(path), "FILE", str(path), "a readable text file",
+                             str(exc)) from None
+        suffix = ".json" if head in ("[", "{") else ".csv"
+    return (_read_json(path) if suffix == ".json" else _read_csv(path)), str(path)
+
+
+def _number(where: str, column: str, cell):
+    """``(value, half a unit of its last written digit)``, or None for an empty cell."""
+    if cell is None:
+        return None
+    if isinstance(cell, bool) or not isinstance(cell, (int, float, str)):
+        raise InputError(where, column, cell, "a number")
+    text = cell.strip() if isinstance(cell, str) else repr(cell)
+    if text == "":
+        return None
+    try:
+        value = float(text)
+        digits = decimal.Decimal(text).as_tuple()
+    except (ValueError, decimal.InvalidOperation):
+        hint = "write a decimal point, not a comma" if "," in text else ""
+        raise InputError(where, column, text, "a number", hint) from None
+    if not math.isfinite(value):
+        raise InputError(where, column, text, "a finite number", "NaN and infinity are not "
+                         "accepted; leave the cell empty for a value not given")
+    return value, 0.5 * 10.0 ** digits.exponent
+
+
+# --------------------------------------------------------------------------- one row
+
+@dataclass(frozen=True)
+class Row:
+    """One checked input row in dimensionless form (module docstring for the scalings).
+
+    ``values`` holds the given or converted ``nu`` (1 for a sphere), ``lam``, ``ca_b``, ``ca``,
+    ``V_over_U``, ``dp_plus_R0``, ``dp_plus_R``, ``ell``, ``film_min`` (floats) and
+    ``shape_class`` (text); ``errors`` the absolute uncertainty of each value (stated
+    ``*_err`` or the rounding of the written value); ``converted`` the quantities obtained from
+    physical columns; ``cells`` the row as given.
+    """
+    index: int
+    where: str
+    kind: str
+    name: str
+    values: dict
+    errors: dict
+    converted: tuple = ()
+    cells: dict = dataclasses.field(default_factory=dict, repr=False)
+
+    def get(self, key, default=None):
+        return self.values.get(key, default)
+
+    @property
+    def dp_plus_R0(self):
+        """Δp⁺R0/(ηU), given or λ × the given Δp⁺R/(ηU); None if neither is given."""
+        if "dp_plus_R0" in self.values:
+            return self.values["dp_plus_R0"]
+        if "dp_plus_R" in self.values:
+            return self.values["dp_plus_R"] * self.values["lam"]
+        return None
+
+
+def _text(where: str, column: str, cell, choices=None) -> str | None:
+    if cell is None or (isinstance(cell, str) and not cell.strip()):
+        return None
+    if not isinstance(cell, str):
+        raise InputError(where, column, cell, "text")
+    text = cell.strip()
+    if choices is not None and text.lower() not in choices:
+        raise InputError(where, column, text, "one of " + ", ".join(choices))
+    return text.lower() if choices is not None else text
+
+
+class _Named:
+    """Re-raise an InvalidParameterError of a conversion as an InputError naming the row and
+    the column that carried the parameter."""
+
+    def __init__(self, where: str, columns: dict):
+        self.where, self.columns = where, columns
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, exc, tb):
+        if isinstance(exc, InvalidParameterError) and not isinstance(exc, InputError):
+            column = self.columns.get(exc.name, exc.name)
+            raise InputError(self.where, column, exc.value, exc.valid,
+                             str(exc).split("; ", 1)[1] if "; " in str(exc) else "") from None
+        return False
+
+
+def parse_row(cells: dict, index: int = 1, where: str | None = None) -> Row:
+    """One raw row (column -> cell) as a checked :class:`Row` (columns: :data:`COLUMNS`).
+
+    Physical columns are converted (module docstring); a dimensionless value and the physical
+    columns that would give it may not both be given. Raises :class:`InputError` naming the row
+    and the column for anything it cannot use.
+    """
+    from .estimate import PHYSICAL_BOUNDS, physical_scales
+    where = where or f"row {index}"
+    for column in cells:
+        if column not in COLUMNS and column not in ERROR_COLUMNS:
+            raise _unknown_column(where, str(column))
+    kind = _text(where, "kind", cells.get("kind"), KINDS) or "vesicle"
+    name = _text(where, "name", cells.get("name")) or ""
+    shape = _text(where, "shape_class", cells.get("shape_class"), ("bullet", "parachute"))
+    raw = {c: _number(where, c, v) for c, v in cells.items()
+           if COLUMNS.get(c, ("number",))[0] != "text"}
+    raw = {c: v for c, v in raw.items() if v is not None}
+    for column in (*raw, *(["shape_class"] if shape else [])):
+        allowed = _ONLY_FOR.get(column.removesuffix("_err"), KINDS)
+        if kind not in allowed:
+            hint = ("ca is a drop's capillary number: set kind=drop for a drop"
+                    if column == "ca" else f"it applies to kind={' or '.join(allowed)} only")
+            raise InputError(where, column, cells[column], f"no {column} for kind={kind}", hint)
+    for column, (value, _) in raw.items():
+        if column.endswith("_err"):
+            if column[:-4] not in raw:
+                raise InputError(where, column, value, f"a {column[:-4]} column beside it",
+                                 "an uncertainty without its value")
+            if value < 0:
+                raise InputError(where, column, value, "an uncertainty >= 0")
+    values = {c: v for c, (v, _) in raw.items() if COLUMNS.get(c, ("",))[0] in ("input", "output")}
+    errors = {c: max(raw.get(f"{c}_err", (0.0, 0.0))[0], rounding)
+              for c, (_, rounding) in raw.items() if not c.endswith("_err")}
+    physical = {c: raw[c][0] for c in _PHYSICAL_INPUTS if c in raw}
+    with _Named(where, {v: k for k, v in _PHYSICAL_INPUTS.items() if v}):
+        for column, bound_name in _PHYSICAL_INPUTS.items():
+            if column in physical and bound_name is not None:
+                lo, hi, reason = PHYSICAL_BOUNDS[bound_name]
+                check_range(bound_name, physical[column], lo, hi, reason=reason)
+    converted = []
+
+    def conflict(quantity: str, sources: str):
+        if quantity in values:
+            raise InputError(where, quantity, cells[quantity], f"either {quantity} or {sources}",
+                             "both are given")
+        converted.append(quantity)
+
+    R0 = d = None
+    with _Named(where, {"volume": "volume_fl", "R0_um": "volume_fl"}):
+        if "volume_fl" in physical:
+            R0 = float(volume_radius(physical["volume_fl"]))
+            if kind == "vesicle" and "area_um2" in physical:
+                conflict("nu", "volume_fl with area_um2")
+                values["nu"] = float(cell_from_volume_area(physical["volume_fl"],
+                                                           physical["area_um2"])[0])
+                errors["nu"] = 0.0
+        elif "area_um2" in physical:
+            raise InputError(where, "area_um2", cells["area_um2"], "volume_fl beside it",
+                             "the reduced volume needs both the volume and the area")
+        if "diameter_um" in physical:
+            d = physical["diameter_um"]
+            if R0 is not None:
+                conflict("lam", "volume_fl with diameter_um")
+                values["lam"], errors["lam"] = float(confinement_from_diameter(R0, d)), 0.0
+    if "lam" in values:
+        if values["lam"] <= 0:
+            raise InputError(where, "lam", cells.get("lam", values["lam"]), "lam > 0")
+        if R0 is None and d is not None:
+            R0 = values["lam"] * d / 2.0
+        elif d is None and R0 is not None:
+            d = 2.0 * R0 / values["lam"]
+    scale = {}
+    if R0 is not None and d is not None:
+        scale = physical_scales(R0, d, physical.get("U_mm_s"), physical.get("eta_mpas"),
+                                physical.get("kappa_j") if kind == "vesicle" else None)
+    elif "U_mm_s" in physical:
+        scale = {"V_mm_s": physical["U_mm_s"]}
+    for quantity, column in _CONVERTED.items():
+        if column in raw:
+            if column not in scale:
+                raise InputError(where, column, cells[column], f"{_NEEDS[column]} beside it",
+                                 f"needed to convert it to {quantity}")
+            conflict(quantity, column)
+            values[quantity] = raw[column][0] / scale[column]
+            errors[quantity] = errors[column] / scale[column]
+    if kind == "vesicle" and "kappa_j" in physical:
+        if "ca_b" not in scale:
+            raise InputError(where, "kappa_j", cells["kappa_j"], "U_mm_s, eta_mpas and the "
+                             "volume radius beside it", "needed to compute ca_b")
+        conflict("ca_b", "kappa_j with U_mm_s and eta_mpas")
+        values["ca_b"] = scale["ca_b"]
+    required = {"vesicle": ("nu", "lam", "V_over_U"), "sphere": ("lam", "V_over_U"),
+                "drop": ("lam", "V_over_U")}[kind]
+    for column in required:
+        if column not in values:
+            source = {"nu": " (or volume_fl and area_um2)", "lam": " (or volume_fl and "
+                      "diameter_um)", "V_over_U": " (or V_mm_s and U_mm_s)"}[column]
+            hint = " (a drop? set kind=drop)" if column == "nu" else ""
+            raise InputError(where, column, None, f"a value{source}", f"required for a {kind}"
+                             + hint)
+    if "dp_plus_R0" not in values and "dp_plus_R" not in values:
+        raise InputError(where, "dp_plus_R0", None, "a value of dp_plus_R0, dp_plus_R or "
+                         "dp_plus_Pa", f"the extra pressure drop is required for a {kind}")
+    with _Named(where, {}):
+        if "nu" in values:
+            check_reduced_volume(values["nu"])
+            if kind == "sphere" and values["nu"] != 1.0:
+                raise InputError(where, "nu", cells.get("nu"), "1 for a sphere (or no nu)")
+        for column in ("ca_b", "ca"):
+            if column in values and values[column] <= 0:
+                raise InputError(where, column, cells[column], f"{column} > 0")
+    if kind == "sphere":
+        values["nu"], errors["nu"] = 1.0, 0.0
+    if shape:
+        values["shape_class"] = shape
+    return Row(index, where, kind, name, values, errors, tuple(converted), dict(cells))
+
+
+def parse_rows(source) -> list[Row]:
+    """Every row of ``source`` (see :func:`read_rows`) as a checked :class:`Row`."""
+    raw, _ = read_rows(source)
+    return [parse_row(cells, n, where) for n, (where, cells) in enumerate(raw, 1)]
+
+
+# --------------------------------------------------------------------------- references
+
+@dataclass(frozen=True)
+class Reference:
+    """A reference value with its absolute error bar (same unit), what it is (``source``),
+    why it is valid for the row (``why``) and a note (stand-ins used for unknown error parts)."""
+    value: float | str
+    error: float
+    source: str
+    why: str
+    note: str = ""
+
+
+def _resolve_map(choice):
+    """The map to read: None the shipped one, False none, a path or a SolutionMap; a reason
+    (str) when there is none. A path that is not a map raises InvalidParameterError (``map``)."""
+    from .solution_map import DEFAULT_MAP, SolutionMap, load_map
+    if choice is False:
+        return "the solution map is switched off"
+    if isinstance(choice, SolutionMap):
+        return choice
+    if choice is None and not DEFAULT_MAP.exists():
+        return f"no solution map shipped ({DEFAULT_MAP} absent)"
+    return load_map(choice)
+
+
+@functools.lru_cache(maxsize=8192)
+def _query(nu: float, ratio: float, ca_b: float, m):
+    from .solution_map import query_map
+    return query_map(nu, ratio, ca_b, m)
+
+
+def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
+                  solution_map=None) -> Reference | str:
+    r"""The solution map's value of ``quantity`` for a vesicle, with its error bar.
+
+    :func:`correlations.solution_map.query_map` at (ν, λ/λc, Ca_B): stored steady BEM and
+    lubrication solutions interpolated in δ^(1/2), log Ca_B and ν, error = interpolation +
+    solver + model error. Where the map cannot say a part, a stand-in is added and named in
+    the note: an unknown solver error is :data:`MAP_UNKNOWN_SOLVER_RTOL` × |value| (the
+    map's BEM tolerance); an unknown lubrication model error (a Ca_B line without a BEM point
+    to compare with) is the relative model error at Ca_B = :data:`DEFAULT_CA_B` plus the change
+    of the value from that Ca_B. Returns the reason (str) when the map has no usable value.
+
+    ``quantity``: ``V_over_U``, ``dp_plus_R0``, ``ell``, ``film_min`` or ``shape_class``;
+    ``solution_map`` as in :func:`check_results`.
+    """
+    from .registry import map_method_name
+    from .solution_map import outside_reason
+    m = _resolve_map(solution_map)
+    if isinstance(m, str):
+        return m
+    ratio = lam / float(critical_confinement(nu))
+    reason = outside_reason(m, nu, ratio, ca_b)
+    if reason:
+        return f"outside the solution map ({reason})"
+    v = _query(nu, ratio, ca_b, m).quantities[quantity]
+    if v.value is None:
+        return f"solution map: {v.note}"
+    source = f"solution map, {map_method_name(v.methods)}"
+    why = (f"inside the map at nu={nu:.4g}, lam/lam_c={ratio:.4g}, Ca_B={ca_b:.4g}; error = "
+           "interpolation + solver + model error (correlations.solution_map)")
+    if isinstance(v.value, str):
+        return Reference(v.value, 0.0, source, why.split("; ")[0] + "; the neighbouring "
+                         "solutions are all of this class")
+    if v.interpolation_error is None:
+        return "solution map: interpolation error unknown here"
+    error, notes = v.error, []
+    if v.solver_error is None:
+        error += MAP_UNKNOWN_SOLVER_RTOL * abs(v.value)
+        notes.append(f"solver error unknown: {MAP_UNKNOWN_SOLVER_RTOL:g} x value used")
+    if v.model_error is None:
+        w = (None if ca_b == DEFAULT_CA_B or outside_reason(m, nu, ratio, DEFAULT_CA_B)
+             else _query(nu, ratio, DEFAULT_CA_B, m).quantities[quantity])
+        if w is None or w.value is None or w.model_error is None:
+            return f"solution map: lubrication model error unknown at Ca_B={ca_b:g}"
+        stand_in = w.model_error / abs(w.value) * abs(v.value) + abs(v.value - w.value)
+        error += stand_in
+        notes.append(f"lubrication model error unknown at Ca_B={ca_b:g}: the one at Ca_B="
+                     f"{DEFAULT_CA_B:g} plus the change from there used ({stand_in:.2g})")
+    return Reference(v.value, error, source, why, "; ".join(notes))
+
+
+def near_critical_reference(nu: float, lam: float, quantity: str) -> Reference | str:
+    r"""Near-critical asymptote of V/U or Δp⁺R0/(ηU) for δ = 1 − λ/λc ≤ 0.1, with its error.
+
+    V/U: Chen et al. 2020 eq. asmyp1 (Barakat & Shaqfeh 2018a), error |s − 1|δ +
+    :data:`NEAR_CRITICAL_SPEED_K` δ^(3/2) with s its slope
+    (:func:`lubrication.asymptotics.speed_slope_near_critical`): our lubrication and BEM
+    solutions have slope 1 (physics notes §4). Δp⁺: eq. asmyp2, error
+    :data:`NEAR_CRITICAL_DP_K` λ δ^(-1/2). Both error models were measured on the converged
+    points of the map (0.6 ≤ ν ≤ 0.98); outside that ν range the note says so.
+    """
+    from lubrication import asymptotics
+    if quantity not in ("V_over_U", "dp_plus_R0"):
+        return f"no near-critical law for {quantity}"
+    delta = 1.0 - lam / float(critical_confinement(nu))
+    hi = asymptotics.NEAR_CRITICAL_RANGE.bounds[0][2]
+    if delta > hi:
+        return f"not near lam_c (delta={delta:.3g} > {hi:g})"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutOfRangeWarning)
+        if quantity == "V_over_U":
+            value = float(asymptotics.speed_near_critical(nu, lam))
+            slope = float(asymptotics.speed_slope_near_critical(nu))
+            error = abs(slope - 1.0) * delta + NEAR_CRITICAL_SPEED_K * delta**1.5
+            source = "Barakat & Shaqfeh 2018a as Chen et al. 2020 eq. asmyp1"
+            model = f"|slope - 1| delta + {NEAR_CRITICAL_SPEED_K:g} delta^(3/2)"
+        else:
+            value = float(asymptotics.dp_plus_near_critical(nu, lam))
+            error = NEAR_CRITICAL_DP_K * lam / math.sqrt(delta)
+            source = "Barakat & Shaqfeh 2018a as Chen et al. 2020 eq. asmyp2"
+            model = f"{NEAR_CRITICAL_DP_K:g} lam delta^(-1/2)"
+    note = "" if 0.6 <= nu <= 0.98 else (f"nu={nu:.3g}: error model measured for 0.6 <= nu <= "
+                                          "0.98, extrapolated")
+    return Reference(value, error, source, f"delta={delta:.3g} <= {hi:g}; error {model} "
+                     "(measured on our converged solutions)", note)
+
+
+def small_object_reference(kind: str, lam: float, quantity: str, nu: float = 1.0,
+                           ca: float | None = None) -> Reference | str:
+    r"""Small-object law of V/U or Δp⁺R0/(ηU) on the axis, with the size of the next term.
+
+    * rigid sphere (``kind`` sphere): V/U = 2 − (4/3)λ² + O(λ⁵), Δp⁺a/(ηU) = 16λ⁶(1 + O(λ⁵))
+      (Chen et al. 2020 eq. small1, small2; Haberman & Sayre 1958), error λ⁵ resp. 16λ¹¹;
+      λ ≤ 0.5 (:data:`lubrication.asymptotics.SMALL_SPHERE_RANGE`).
+    * vesicle, 0.9 ≤ ν < 1, λ ≤ 0.5 (Chen et al. 2020 §IV.C; registry SMALL_VESICLE_RANGE): the
+      sphere's laws, error the sphere's plus (1 − ν) × the leading deviation ((4/3)λ²
+      resp. 16λ⁶): a vesicle at rest is not a sphere. Measured on our BEM (ν = 0.9-0.98, λ/λc
+      = 0.2-0.4) its effect is at most 0.4 (1 − ν) of the leading term.
+    * clean drop of viscosity ratio 1 (``kind`` drop): V/U = 2 − 0.8λ², Δp⁺R0/(ηU) = 4.8λ⁶
+      (Hetsroni, Haber & Wacholder 1970), error :data:`SMALL_DROP_SPEED_K` λ⁵ resp.
+      :data:`SMALL_DROP_DP_K` λ⁵ × 4.8λ⁶, measured with our BEM for λ ≤ 0.5, Ca ≤
+      :data:`SMALL_DROP_CA_MAX` (needs ``ca``).
+    """
+    from lubrication import asymptotics
+    from .registry import SMALL_VESICLE_RANGE
+    if quantity not in ("V_over_U", "dp_plus_R0"):
+        return f"no small-object law for {quantity}"
+    hi = asymptotics.SMALL_SPHERE_RANGE.bounds[0][2]
+    if lam > hi:
+        return f"not a small object (lam={lam:.3g} > {hi:g})"
+    speed = quantity == "V_over_U"
+    if kind == "drop":
+        if ca is None or ca > SMALL_DROP_CA_MAX:
+            return (f"small-drop law measured for Ca <= {SMALL_DROP_CA_MAX:g}: "
+                    + ("no ca given" if ca is None else f"ca={ca:.3g}"))
+        lead = 0.8 * lam**2 if speed else 4.8 * lam**6
+        value = 2.0 - lead if speed else lead
+        error = (SMALL_DROP_SPEED_K * lam**5 if speed
+                 else SMALL_DROP_DP_K * lam**5 * lead)
+        return Reference(value, error, "small clean drop, Hetsroni, Haber & Wacholder 1970",
+                         f"lam={lam:.3g} <= {hi:g}, Ca={ca:.3g} <= {SMALL_DROP_CA_MAX:g}; "
+                         "error: next term, measured with our BEM drop")
+    if kind == "vesicle" and not SMALL_VESICLE_RANGE.contains(lam=lam, nu=nu):
+        return f"small-sphere law not valid for a vesicle here ({SMALL_VESICLE_RANGE.describe()})"
+    lead = 4.0 / 3.0 * lam**2 if speed else 16.0 * lam**6
+    value = 2.0 - lead if speed else lead
+    error = (lam**5 if speed else lam**5 * lead) + (1.0 - nu) * lead
+    source = "small rigid sphere, Chen et al. 2020 eq. " + ("small1" if speed else "small2")
+    why = f"lam={lam:.3g} <= {hi:g}; error: the O(lam^5) next term"
+    if nu < 1.0:
+        why = f"nu={nu:.3g} >= 0.9, " + why + f" + (1 - nu) x the leading deviation (asphericity)"
+    return Reference(value, error, source, why)
+
+
+@functools.lru_cache(maxsize=256)
+def _sphere_solution(lam: float):
+    from bem.solve import solve_sphere
+
+    from .registry import _guarded
+    return _guarded(solve_sphere, lam)
+
+
+@functools.lru_cache(maxsize=256)
+def _drop_solution(lam: float, ca: float):
+    from bem.drop import solve_drop
+
+    from .registry import _guarded
+    return _guarded(solve_drop, lam, ca)
+
+
+def _exact(value: float, what: str) -> Reference:
+    return Reference(value, 0.0, f"rigid sphere: {what} (exact)", "a rigid sphere keeps its shape")
+
+
+def sphere_reference(lam: float, quantity: str, bem: bool = True) -> Reference | str:
+    r"""Free rigid sphere of radius a = λR on the axis: h/R = 1 − λ and ℓ = 2λ exactly; V/U and
+    Δp⁺a/(ηU) from :func:`bem.solve.solve_sphere` (default tolerance 1e-8, error: the
+    refinement pair's difference), about a second per λ, cached. Returns the reason (str) when
+    there is none (``bem`` False, λ outside the BEM's envelope, no convergence)."""
+    if quantity == "film_min":
+        return _exact(1.0 - lam, "h/R = 1 - lam")
+    if quantity == "ell":
+        return _exact(2.0 * lam, "L/R = 2 lam")
+    if not bem:
+        return "BEM references skipped"
+    from bem.solve import check_sphere_inputs
+    try:
+        check_sphere_inputs(lam)
+    except InvalidParameterError as exc:
+        return f"BEM sphere: {exc}"
+    res = _sphere_solution(lam)
+    if not getattr(res, "converged", False):
+        return f"BEM sphere did not converge: {res.message}"
+    value, error = ((res.V_over_U, res.V_over_U_err) if quantity == "V_over_U"
+                    else (res.dp_plus_R0, res.dp_plus_R_err * lam))
+    return Reference(value, error, "BEM rigid sphere (bem.solve.solve_sphere)",
+                     f"a/R={lam:.4g}: full Stokes solution; error = refinement-pair difference")
+
+
+def drop_reference(lam: float, ca: float | None, quantity: str,
+                   bem: bool = True) -> Reference | str:
+    r"""Steady clean drop of viscosity ratio 1 from :func:`bem.drop.solve_drop` (seconds per
+    (λ, Ca), cached): V/U and Δp⁺R0/(ηU) with the refinement pair's difference as error; ℓ and
+    h/R (length, smallest gap) with the solver's relative tolerance as error (it reports none
+    for them). Returns the reason (str) when there is none."""
+    if not bem:
+        return "BEM references skipped"
+    if ca is None:
+        return "no ca given (the drop BEM needs the capillary number)"
+    from bem.drop import check_drop_inputs
+    try:
+        check_drop_inputs(lam, ca)
+    except InvalidParameterError as exc:
+        return f"BEM drop: {exc}"
+    res = _drop_solution(lam, ca)
+    if not getattr(res, "success", False):
+        return f"BEM drop has no converged steady state: {res.message}"
+    attribute = {"V_over_U": "V_over_U", "dp_plus_R0": "dp_plus_R0", "ell": "length",
+                 "film_min": "film"}[quantity]
+    value = getattr(res, attribute)
+    error = res.error_estimate.get(quantity, res.tol * abs(value))
+    return Reference(value, error, "BEM clean drop (bem.drop.solve_drop)",
+                     f"lam={lam:.4g}, Ca={ca:.4g}: full Stokes solution; error = refinement-pair "
+                     "difference (length and gap: the solver tolerance)")
+
+
+# --------------------------------------------------------------------------- bounds
+
+def film_upper_bound(nu: float, lam: float) -> float:
+    r"""Largest smallest gap of a vesicle, h/R ≤ δ = 1 − λ/λc(ν).
+
+    A membrane of area A encloses at most the volume of the spherocylinder of its area inside
+    a cylinder of radius ρ, the critical shape that defines λc (Canham 1968; Barakat & Shaqfeh
+    2018a; Chen et al. 2020 eq. critic). The vesicle fits inside the cylinder of radius
+    ρ = R − h that touches it, so it is at most critical there: λR/ρ ≤ λc, i.e. h/R ≤ 1 − λ/λc.
+    (Chen et al. eq. sfilm2 is this bound to leading order; our solutions have h/R =
+    0.60-0.97 δ.)
+
+    >>> round(film_upper_bound(0.6, 1.94), 4)
+    0.0208
+    """
+    return 1.0 - lam / float(critical_confinement(nu))
+
+
+def film_lower_bound(nu: float, lam: float) -> float:
+    r"""Smallest possible gap of a vesicle, h/R ≥ 1 − √2 λ_A, λ_A = λν^(−1/3).
+
+    Both faces of the membrane cover the disc of its largest radius r_max, so A ≥ 2πr_max²
+    and r_max/R ≤ √(A/2π)/R = √2 λ_A (equality for a flat disc; geometry).
+
+    >>> round(film_lower_bound(1.0, 0.5), 4)
+    0.2929
+    """
+    return 1.0 - math.sqrt(2.0) * lam * nu ** (-1.0 / 3.0)
+
+
+def length_lower_bound(lam: float, film: float = 0.0) -> float:
+    r"""Shortest length of an object of volume (4/3)πR0³ whose largest radius is R − h:
+    ℓ ≥ (4/3)λ³/(1 − h/R)², the cylinder of that radius holding the volume (a closed body with
+    rounded ends, e.g. the spherocylinder, is longer).
+
+    >>> round(length_lower_bound(1.0), 4)
+    1.3333
+    """
+    return 4.0 / 3.0 * lam**3 / (1.0 - film) ** 2
+
+
+# --------------------------------------------------------------------------- checks
+
+@dataclass(frozen=True)
+class CheckResult:
+    """One check of one row: ``value`` of the row, ``reference`` (a bound or a reference
+    value), ``deviation`` = value − reference (signed, in the value's unit), ``tolerance`` (the
+    absolute deviation that still passes), the reference's ``source`` and ``why`` it is valid
+    for the row, and a ``note``."""
+    name: str
+    quantity: str
+    verdict: Verdict
+    value: float | str | None
+    reference: float | str | None
+    deviation: float | None
+    tolerance: float | None
+    source: str
+    why: str
+    note: str = ""
+
+    def to_dict(self) -> dict:
+        out = dataclasses.asdict(self)
+        out["verdict"] = self.verdict.value
+        return out
+
+
+def _bound(name: str, quantity: str, value: float, bound: float, err: float, *, upper: bool,
+           strict: bool, source: str, why: str) -> CheckResult:
+    """``value`` below (``upper``) or above ``bound``: fail when past it by more than ``err``
+    (the row's uncertainty), warn within it; on a ``strict`` bound equality counts as past."""
+    excess = value - bound if upper else bound - value
+    if excess < 0 or (excess == 0 and not strict):
+        verdict = Verdict.PASS
+    else:
+        verdict = Verdict.WARN if excess < err or (excess == 0 and err > 0) else Verdict.FAIL
+    return CheckResult(name, quantity, verdict, value, bound, value - bound, err, source, why)
+
+
+def _worse(a: CheckResult, b: CheckResult) -> CheckResult:
+    """Of two checks of one value against its two bounds, the one to report: the worse
+    verdict, else the nearer bound."""
+    return min((a, b), key=lambda c: (-c.verdict.rank, abs(c.deviation)))
+
+
+def _compare(name: str, quantity: str, value: float, err: float, ref: Reference,
+             scale: float = 1.0) -> CheckResult:
+    """``value`` (uncertainty ``err``) against ``ref`` times ``scale``: tolerance = both
+    errors, verdict by :func:`_verdict`."""
+    reference, ref_error = ref.value * scale, ref.error * abs(scale)
+    deviation, tolerance = value - reference, ref_error + err
+    return CheckResult(name, quantity, _verdict(deviation, tolerance), value, reference,
+                       deviation, tolerance, ref.source, ref.why, ref.note)
+
+
+def _dp(row: Row) -> tuple[str, float, float, float]:
+    """The row's extra pressure drop as given: (column, value, uncertainty, factor from
+    Δp⁺R0/(ηU) to it), dp_plus_R0 when given, else dp_plus_R."""
+    key = "dp_plus_R0" if "dp_plus_R0" in row.values else "dp_plus_R"
+    return key, row.values[key], row.errors[key], 1.0 if key == "dp_plus_R0" else 1.0 / row.get("lam")
+
+
+def _dp_R0(row: Row) -> tuple[float, float]:
+    """Δp⁺R0/(ηU) and its uncertainty (from dp_plus_R with λ's rounding when only it is given)."""
+    key, value, err, factor = _dp(row)
+    if factor == 1.0:
+        return value, err
+    lam = row.get("lam")
+    return value * lam, err * lam + abs(value) * row.errors.get("lam", 0.0)
+
+
+def _bound_checks(row: Row) -> tuple[list[CheckResult], bool]:
+    """The hard bounds of the module docstring; returns (checks, whether the object passes the
+    tube so that references apply)."""
+    from lubrication.checks import OUTPUT_BOUNDS
+    v, e, checks = row.values, row.errors, []
+    lam, nu = v["lam"], v.get("nu", 1.0)
+    passes = True
+    if row.kind != "drop":
+        lam_c = float(critical_confinement(nu))
+        what = ("a rigid sphere fits the tube only if a < R" if row.kind == "sphere" else
+                "lam >= lam_c: the vesicle cannot pass this tube intact")
+        c = _bound("lam < lam_c", "lam", lam, lam_c, e.get("lam", 0.0), upper=True, strict=True,
+                   source="critical confinement, Chen et al. 2020 eq. critic",
+                   why=f"geometry: {what}")
+        checks.append(c)
+        passes = c.verdict is not Verdict.FAIL
+    lo, hi, reason = OUTPUT_BOUNDS["V_over_U"]
+    V, eV = v["V_over_U"], e["V_over_U"]
+    below = _bound("1 <= V/U < 2", "V_over_U", V, lo, eV, upper=False, strict=False,
+                   source="bound of Poiseuille flow", why=reason)
+    above = _bound("1 <= V/U < 2", "V_over_U", V, hi, eV, upper=True, strict=True,
+                   source="bound of Poiseuille flow", why=reason + "; a finite object lags the "
+                   "centreline")
+    checks.append(_worse(below, above))
+    for key in ("dp_plus_R0", "dp_plus_R"):
+        if key in v:
+            checks.append(_bound("dp+ > 0", key, v[key], 0.0, e[key], upper=False, strict=True,
+                                 source="sign of the extra dissipation",
+                                 why=OUTPUT_BOUNDS["dp_plus_R0"][2] + "; positive for a finite "
+                                 "object"))
+    film = v.get("film_min")
+    if film is not None:
+        if row.kind == "vesicle" and nu < 1.0:
+            top, top_source = film_upper_bound(nu, lam), "h/R <= 1 - lam/lam_c (film_upper_bound)"
+        else:
+            top, top_source = 1.0, "h/R < 1 (the object has a size)"
+        low = _bound("0 < h/R <= bound", "film_min", film, 0.0, e["film_min"], upper=False,
+                     strict=True, source="h/R > 0", why="a steady object does not touch the wall")
+        high = _bound("0 < h/R <= bound", "film_min", film, top, e["film_min"], upper=True,
+                      strict=False, source=top_source, why="a closed membrane of this area and "
+                      "volume fits only a tube of radius above R0/lam_c (film_upper_bound)")
+        checks.append(_worse(low, high))
+        if row.kind == "vesicle":
+            checks.append(_bound("h/R >= 1 - sqrt(2) lam_A", "film_min", film,
+                                 film_lower_bound(nu, lam), e["film_min"], upper=False,
+                                 strict=False, source="film_lower_bound",
+                                 why="both faces of the membrane cover its widest disc"))
+    ell = v.get("ell")
+    if ell is not None:
+        h = film if film is not None and 0.0 <= film < 1.0 else 0.0
+        checks.append(_bound("ell >= volume bound", "ell", ell, length_lower_bound(lam, h),
+                             e["ell"], upper=False, strict=False,
+                             source="length_lower_bound: (4/3) lam^3/(1 - h/R)^2",
+                             why="the volume fits in the cylinder of the largest radius"))
+    if "dp_plus_R0" in v and "dp_plus_R" in v:
+        R0, R = v["dp_plus_R0"], v["dp_plus_R"]
+        tol = e["dp_plus_R0"] + lam * e["dp_plus_R"] + abs(R) * e.get("lam", 0.0)
+        checks.append(CheckResult("dp+R0 = lam dp+R", "dp_plus_R0", _verdict(R0 - lam * R, tol),
+                                  R0, lam * R, R0 - lam * R, tol, "definition of the scalings",
+                                  "dp+ R0/(eta U) = (R0/R) dp+ R/(eta U) whatever the method"))
+    return checks, passes
+
+
+def chen_film_scaling_check(row: Row) -> CheckResult | str:
+    r"""Δp⁺R0/(ηU) against Chen et al. 2020's correlation (3/2)λℓ/δ (fig. dpa_film), with
+    δ = 1 − λ/λc (their eq. sfilm2: the film at the vesicle's midplane to leading order; the
+    smallest gap is 0.6-0.97 δ in our solutions, so the reported ``film_min`` is not used).
+    Valid for 0.02 ≤ δ ≤ 0.1 (:data:`CHEN_FILM_SCALING_RANGE`) with tolerance
+    :data:`CHEN_FILM_SCALING_RTOL` × the correlation (the scatter of our converged solutions).
+    A vesicle row with ℓ; returns the reason (str) when it does not apply."""
+    from .pressure import dp_plus_film_chen2020
+    nu, lam, ell = row.get("nu"), row.get("lam"), row.get("ell")
+    if row.kind != "vesicle" or nu >= 1.0 or ell is None or ell <= 0:
+        return "needs a vesicle with ell"
+    delta = 1.0 - lam / float(critical_confinement(nu))
+    lo, hi = CHEN_FILM_SCALING_RANGE
+    if not lo <= delta <= hi:
+        return f"Chen et al.'s (3/2) lam ell/delta holds for {lo:g} <= delta <= {hi:g}"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutOfRangeWarning)
+        pred = float(dp_plus_film_chen2020(lam, ell, delta))
+    value, err = _dp_R0(row)
+    tol = CHEN_FILM_SCALING_RTOL * pred + err + pred * row.errors["ell"] / ell
+    return CheckResult("dp+ vs (3/2) lam ell/delta", "dp_plus_R0", _verdict(value - pred, tol),
+                       value, pred, value - pred, tol,
+                       "Chen et al. 2020 fig. dpa_film (delta = 1 - lam/lam_c)",
+                       f"delta={delta:.3g} in [{lo:g}, {hi:g}]; tolerance "
+                       f"{CHEN_FILM_SCALING_RTOL:g} x value: the scatter of our solutions")
+
+
+def shape_volume_area_checks(row: Row) -> list[CheckResult] | str:
+    r"""Volume and area of the spherocylinder of radius ρ = 1 − h/R and length ℓ against the
+    vesicle's, near λc.
+
+    Spherocylinder: volume πρ²(L − 2ρ/3), area 2πρL (Archimedes), i.e. relative to the vesicle
+    ε_V = (3ρ²ℓ − 2ρ³)/(4λ³) − 1 and ε_A = ρℓ/(2λ_A²) − 1, λ_A = λν^(−1/3). Near λc a vesicle
+    is nearly this spherocylinder: for δ ≤ :data:`SHAPE_RANGE_DELTA` our converged solutions
+    lie in the bands :data:`SHAPE_VOLUME_BAND` and :data:`SHAPE_AREA_BAND` (centre ± half-width,
+    × δ). A result whose volume (area) drifted by 1 % moves ε_V (ε_A) by 1 %, several half-widths
+    for δ ≲ 0.01: the check sees it where ℓ and h hardly tell otherwise. The row's
+    uncertainties of ℓ and h are propagated. A vesicle row with ℓ and h; returns the reason
+    (str) when it does not apply.
+    """
+    nu, lam, ell, h = row.get("nu"), row.get("lam"), row.get("ell"), row.get("film_min")
+    if row.kind != "vesicle" or nu >= 1.0 or ell is None or h is None or not 0 <= h < 1:
+        return "needs a vesicle with ell and film_min"
+    delta = 1.0 - lam / float(critical_confinement(nu))
+    if not 0.0 < delta <= SHAPE_RANGE_DELTA:
+        return f"the spherocylinder bands hold for delta <= {SHAPE_RANGE_DELTA:g}"
+    rho, lam_a2 = 1.0 - h, lam**2 * nu ** (-2.0 / 3.0)
+    e_ell, e_h = row.errors["ell"], row.errors["film_min"]
+    eps_v = (3 * rho**2 * ell - 2 * rho**3) / (4 * lam**3) - 1.0
+    err_v = (3 * rho**2 * e_ell + (6 * rho * ell - 6 * rho**2) * e_h) / (4 * lam**3)
+    eps_a = rho * ell / (2 * lam_a2) - 1.0
+    err_a = (rho * e_ell + ell * e_h) / (2 * lam_a2)
+    out = []
+    for name, eps, err, (centre, half) in (("volume of the shape", eps_v, err_v,
+                                            SHAPE_VOLUME_BAND),
+                                           ("area of the shape", eps_a, err_a, SHAPE_AREA_BAND)):
+        ref, tol = centre * delta, half * delta + err
+        out.append(CheckResult(name, "ell", _verdict(eps - ref, tol), eps, ref, eps - ref, tol,
+                               "spherocylinder of radius 1 - h/R and length ell",
+                               f"delta={delta:.3g} <= {SHAPE_RANGE_DELTA:g}: relative excess in "
+                               f"[{centre - half:g}, {centre + half:g}] delta on our solutions"))
+    return out
+
+
+def shape_class_check(row: Row, solution_map=None) -> CheckResult | str:
+    r"""The row's ``shape_class`` against the solution map where its neighbouring solutions
+    share one class (disagreement fails), else against the transition line ν_T = 1.126 −
+    0.29λ of Chen et al. 2020 (eq. transition) inside its range
+    (:data:`correlations.shape.SHAPE_CLASS_RANGE_CHEN2020`): disagreement warns within
+    :data:`TRANSITION_BAND_NU` of the line (where our map's transitions lie), fails beyond."""
+    from .shape import SHAPE_CLASS_RANGE_CHEN2020, shape_class_chen2020
+    given = row.get("shape_class")
+    if given is None:
+        return "no shape_class given"
+    nu, lam = row.get("nu"), row.get("lam")
+    ca_b = row.get("ca_b", DEFAULT_CA_B)
+    ref = map_reference(nu, lam, ca_b, "shape_class", solution_map)
+    if isinstance(ref, Reference):
+        verdict = Verdict.PASS if given == ref.value else Verdict.FAIL
+        return CheckResult("shape class", "shape_class", verdict, given, ref.value, None, None,
+                           ref.source, ref.why)
+    if not SHAPE_CLASS_RANGE_CHEN2020.contains(nu=nu, lam=lam, ca_b=ca_b):
+        return f"{ref}; outside the range of Chen et al.'s transition line " \
+               f"({SHAPE_CLASS_RANGE_CHEN2020.describe()})"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutOfRangeWarning)
+        expected = str(shape_class_chen2020(nu, lam))
+    distance = nu - (1.126 - 0.29 * lam)
+    verdict = (Verdict.PASS if given == expected else
+               Verdict.WARN if abs(distance) <= TRANSITION_BAND_NU else Verdict.FAIL)
+    return CheckResult("shape class", "shape_class", verdict, given, expected, distance,
+                       TRANSITION_BAND_NU, "Chen et al. 2020 eq. transition",
+                       f"inside its range; a disagreement within {TRANSITION_BAND_NU:g} in nu of "
+                       f"the line is a warning (deviation: nu - nu_T)", ref)
+
+
+#: Monotone trends along a series at fixed nu and Ca_B: (quantity, +1 increasing / −1
+#: decreasing with lam, check name). Not ell and h/R: at a bullet-parachute switch the length
+#: drops (our map at Ca_B = 15: bullet at lam/lam_c = 0.3, shorter parachute at 0.4, nu
+#: 0.6-0.75).
+_TRENDS = (("V_over_U", -1, "V/U decreases with lam"),
+           ("dp_plus_R0", +1, "dp+R0 increases with lam"))
+
+
+def trend_checks(rows) -> dict:
+    r"""Monotonicity along each series: rows of kind vesicle sharing ν and Ca_B (or both
+    without Ca_B), and the rigid spheres, sorted by λ. A larger object in the same tube moves
+    slower and disturbs the flow more: V/U decreases, Δp⁺R0/(ηU) increases (Chen et al. 2020
+    figs. vel and dpa; every line of our map). A pair of rows against the trend fails, or warns
+    when the step is within the two rows' uncertainties. Drops are not checked (the trends
+    with λ at fixed Ca are not established for them). Returns {row index: [CheckResult of the
+    row against the previous one of its series]}.
+    """
+    series = {}
+    for row in rows:
+        if row.kind == "drop":
+            continue
+        ca_b = row.get("ca_b")
+        key = (row.kind, round(row.get("nu"), 9), None if ca_b is None else round(ca_b, 9))
+        series.setdefault(key, []).append(row)
+    out = {}
+    for members in series.values():
+        members = sorted(members, key=lambda r: r.get("lam"))
+        for a, b in zip(members, members[1:]):
+            if b.get("lam") <= a.get("lam"):
+                continue
+            for quantity, sign, name in _TRENDS:
+                if quantity == "dp_plus_R0":
+                    (va, ea), (vb, eb) = _dp_R0(a), _dp_R0(b)
+                else:
+                    va, ea, vb, eb = a.get(quantity), a.errors[quantity], b.get(quantity), \
+                        b.errors[quantity]
+                step = sign * (vb - va)
+                verdict = (Verdict.PASS if step > 0 else
+                           Verdict.WARN if -step < ea + eb or (step == 0 and ea + eb > 0)
+                           else Verdict.FAIL)
+                out.setdefault(b.index, []).append(CheckResult(
+                    name, quantity, verdict, vb, va, vb - va, ea + eb,
+                    f"{a.where} (lam={a.get('lam'):.4g})",
+                    "series at fixed nu and Ca_B: a larger object in the same tube"))
+    return out
+
+
+# --------------------------------------------------------------------------- the report
+
+@dataclass(frozen=True)
+class RowReport:
+    """The checks of one row, the notes (references that do not apply and why, assumptions),
+    and its verdict (the worst check)."""
+    row: Row
+    checks: tuple
+    notes: tuple = ()
+
+    @property
+    def verdict(self) -> Verdict:
+        return _worst(c.verdict for c in self.checks)
+
+    def to_dict(self) -> dict:
+        return {"row": self.row.index, "where": self.row.where, "name": self.row.name,
+                "kind": self.row.kind, "verdict": self.verdict.value,
+                "values": dict(self.row.values), "uncertainties": dict(self.row.errors),
+                "converted": list(self.row.converted),
+                "checks": [c.to_dict() for c in self.checks], "notes": list(self.notes)}
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """Result of :func:`check_results`: one :class:`RowReport` per input row, where the rows
+    came from, the map used, the assumptions made and provenance."""
+    rows: tuple
+    source: str
+    map_source: str
+    assumptions: tuple = ()
+    provenance: dict = dataclasses.field(default_factory=dict)
+
+    @property
+    def verdict(self) -> Verdict:
+        return _worst(r.verdict for r in self.rows)
+
+    @property
+    def counts(self) -> dict:
+        return {v.value: sum(r.verdict is v for r in self.rows) for v in Verdict}
+
+    def failures(self, include_warnings: bool = False) -> list[tuple[RowReport, CheckResult]]:
+        """(row, check) of every failed check (and warning, if asked), in row order."""
+        bad = {Verdict.FAIL, Verdict.WARN} if include_warnings else {Verdict.FAIL}
+        return [(r, c) for r in self.rows for c in r.checks if c.verdict in bad]
+
+    def to_dict(self) -> dict:
+        return {"verdict": self.verdict.value, "counts": self.counts, "source": self.source,
+                "map": self.map_source, "assumptions": list(self.assumptions),
+                "tolerance_rule": TOLERANCE_RULE, "rows": [r.to_dict() for r in self.rows],
+                "provenance": dict(self.provenance)}
+
+    def format_table(self) -> str:
+        """A fixed-width table, one line per check (row, check, verdict, value, reference,
+        deviation, tolerance, reference used), then the notes of the rows and a summary."""
+        from lubrication.cli_contract import format_value
+        head = ("row", "check", "verdict", "value", "reference", "deviation", "tolerance",
+                "reference used")
+        cells = [head]
+        for r in self.rows:
+            label = str(r.row.index) + (f" {r.row.name}" if r.row.name else "")
+            for c in r.checks:
+                cells.append((label, c.name, c.verdict.value.upper() if c.verdict is not
+                              Verdict.PASS else "pass", *(format_value(x) for x in (
+                                  c.value, c.reference, c.deviation, c.tolerance)), c.source))
+        widths = [max(len(str(line[i])) for line in cells) for i in range(len(head) - 1)]
+        lines = []
+        for k, line in enumerate(cells):
+            lines.append("  ".join(str(x).ljust(w) for x, w in zip(line, widths)) + "  "
+                         + line[-1])
+            if k == 0:
+                lines.append("  ".join("-" * w for w in widths) + "  " + "-" * 14)
+        notes = [f"row {r.row.index}: {n}" for r in self.rows for n in r.notes]
+        counts = ", ".join(f"{n} {v}" for v, n in self.counts.items())
+        return "\n".join([f"Consistency check of {self.source} (map: {self.map_source})",
+                          *lines, "", *(["notes:"] + notes if notes else []),
+                          *[f"assumption: {a}" for a in self.assumptions],
+                          f"rule: {TOLERANCE_RULE}",
+                          f"rows: {counts}; verdict: {self.verdict.value.upper()}"])
+
+
+#: The tolerance and verdict rule in one line (reports and tables print it).
+TOLERANCE_RULE = (f"tolerance = reference error + the row's uncertainty (its *_err, else half a "
+                  f"unit of the last digit written); pass within 1x, warn within "
+                  f"{WARN_FACTOR:g}x, fail beyond; a hard bound fails when violated by more "
+                  f"than the row's uncertainty")
+
+#: Short labels of the columns in check names.
+_LABEL = {"V_over_U": "V/U", "dp_plus_R0": "dp+R0", "dp_plus_R": "dp+R", "ell": "ell",
+          "film_min": "h/R"}
+
+
+def _reference(row: Row, quantity: str, bem: bool, solution_map) -> Reference | str:
+    """The most accurate reference of ``quantity`` for the row (module docstring, step 2), or
+    the reasons there is none."""
+    lam, nu = row.get("lam"), row.get("nu", 1.0)
+    if row.kind == "drop":
+        tries = (lambda: drop_reference(lam, row.get("ca"), quantity, bem),
+                 lambda: small_object_reference("drop", lam, quantity, ca=row.get("ca")))
+    elif row.kind == "sphere" or nu == 1.0:
+        tries = (lambda: sphere_reference(lam, quantity, bem),
+                 lambda: small_object_reference("sphere", lam, quantity))
+    else:
+        ca_b = row.get("ca_b", DEFAULT_CA_B)
+        tries = (lambda: map_reference(nu, lam, ca_b, quantity, solution_map),
+                 lambda: near_critical_reference(nu, lam, quantity),
+                 lambda: small_object_reference("vesicle", lam, quantity, nu=nu))
+    reasons = []
+    for attempt in tries:
+        ref = attempt()
+        if isinstance(ref, Reference):
+            return ref
+        reasons.append(ref)
+    return "; ".join(reasons)
+
+
+def _row_checks(row: Row, bem: bool, solution_map) -> tuple[list, list, bool]:
+    """Every check of one row except the series (module docstring), the notes, and whether
+    the object fits the tube (else only the bounds are checked)."""
+    checks, passes = _bound_checks(row)
+    notes = []
+    if not passes:
+        return checks, ["references skipped: the object cannot be in this tube"], False
+    if row.kind == "vesicle" and row.get("nu") < 1.0 and "ca_b" not in row.values:
+        notes.append(f"ca_b not given: the solution map is read at Ca_B = {DEFAULT_CA_B:g} "
+                     "(Chen et al. 2020's value; shapes virtually independent of Ca_B >= 50, "
+                     "their §III.A)")
+    for quantity in ("V_over_U", "dp_plus_R0", "ell", "film_min"):
+        if quantity == "dp_plus_R0":
+            key, value, err, factor = _dp(row)
+        elif quantity in row.values:
+            key, value, err, factor = quantity, row.get(quantity), row.errors[quantity], 1.0
+        else:
+            continue
+        ref = _reference(row, quantity, bem, solution_map)
+        if isinstance(ref, Reference):
+            checks.append(_compare(f"{_LABEL[key]} vs reference", key, value, err, ref, factor))
+        else:
+            notes.append(f"{quantity}: no reference ({ref})")
+    for relation in (chen_film_scaling_check, shape_volume_area_checks):
+        result = relation(row)
+        if isinstance(result, CheckResult):
+            checks.append(result)
+        elif isinstance(result, list):
+            checks.extend(result)
+    if "shape_class" in row.values:
+        result = shape_class_check(row, solution_map)
+        if isinstance(result, CheckResult):
+            checks.append(result)
+        else:
+            notes.append(f"shape_class: no reference ({result})")
+    return checks, notes, True
+
+
+def check_results(rows_or_path, *, bem: bool = True, solution_map=None) -> CheckReport:
+    r"""Check every row of ``rows_or_path`` against the physics and the references.
+
+    Parameters
+    ----------
+    rows_or_path : str, Path or list of dict
+        A CSV or JSON file or the rows themselves (:func:`read_rows`; columns :data:`COLUMNS`
+        and :data:`ERROR_COLUMNS`). Every row is read and converted before any check.
+    bem : bool
+        Compute the BEM references of sphere and drop rows (about a second per (λ, Ca),
+        cached); False skips them (the small-object laws remain where valid).
+    solution_map : None, False, str, Path or SolutionMap
+        The map of the vesicle references: None the shipped one, False none, or a packed map
+        file (InvalidParameterError naming ``map`` if it is not one).
+
+    Returns
+    -------
+    CheckReport
+        Per row its checks (:class:`CheckResult`), notes and verdict; the module docstring
+        gives the checks, tolerances and verdicts.
+
+    Raises
+    ------
+    InputError
+        For any input that cannot be read or used (naming the row and column), before any
+        check.
+
+    Examples
+    --------
+    >>> rep = check_results([{"kind": "sphere", "lam": 0.1, "V_over_U": 1.9867,
+    ...                       "dp_plus_R0": 1.6e-5}], bem=False, solution_map=False)
+    >>> rep.verdict.value, [c.name for c in rep.rows[0].checks][:3]
+    ('pass', ['lam < lam_c', '1 <= V/U < 2', 'dp+ > 0'])
+    """
+    from lubrication.io import provenance
+    raw, source = read_rows(rows_or_path)
+    rows = [parse_row(cells, n, where) for n, (where, cells) in enumerate(raw, 1)]
+    m = _resolve_map(solution_map)
+    map_source = m if isinstance(m, str) else m.source
+    per_row = [_row_checks(row, bem, m) for row in rows]
+    trends = trend_checks([row for row, (_, _, fits) in zip(rows, per_row) if fits])
+    reports = tuple(RowReport(row, tuple(checks + trends.get(row.index, [])), tuple(notes))
+                    for row, (checks, notes, _) in zip(rows, per_row))
+    assumptions = []
+    default_ca = [r.index for r in rows if r.kind == "vesicle" and "ca_b" not in r.values]
+    if default_ca:
+        assumptions.append(f"{len(default_ca)} vesicle rows without ca_b: the map was read at "
+                           f"Ca_B = {DEFAULT_CA_B:g} (Chen et al. 2020 §III.A: shapes virtually "
+                           "independent of Ca_B >= 50)")
+    if not bem and any(r.kind != "vesicle" or r.get("nu") == 1.0 for r in rows):
+        assumptions.append("BEM references skipped (bem=False): spheres and drops are checked "
+                           "against the small-object laws only, where they are valid")
+    return CheckReport(reports, source, map_source, tuple(assumptions), provenance())
+
+
+def assert_consistent(rows_or_path, *, allow_warnings: bool = True, **options) -> CheckReport:
+    """:func:`check_results`, raising AssertionError that lists every failed check (and every
+    warning when ``allow_warnings`` is False); returns the report otherwise. For a user's own
+    tests::
+
+        def test_my_solver_agrees_with_vesicle_tube():
+            assert_consistent("my_results.csv", bem=False)
+    """
+    report = check_results(rows_or_path, **options)
+    bad = report.failures(include_warnings=not allow_warnings)
+    if bad:
+        from lubrication.cli_contract import format_value
+        lines = [f"{r.row.where}{' ' + r.row.name if r.row.name else ''}: {c.name} "
+                 f"{c.verdict.value.upper()}: value {format_value(c.value)}, reference "
+                 f"{format_value(c.reference)} ({c.source}), deviation "
+                 f"{format_value(c.deviation)}, tolerance {format_value(c.tolerance)}"
+                 for r, c in bad]
+        raise AssertionError(f"{len({id(r) for r, _ in bad})} of {len(report.rows)} rows of "
+                             f"{report.source} are not consistent:\n" + "\n".join(lines))
+    return report

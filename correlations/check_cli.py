@@ -1,0 +1,164 @@
+"""``vesicle-tube check FILE``: the consistency check on the command line, and its report.
+
+Follows :mod:`lubrication.cli_contract`: a table (one line per check) or ``--json`` (one object
+with a ``rows`` list, each row with its ``verdict`` and its ``checks``); exit 0 when no row
+fails (warnings allowed), 1 when a row fails, 2 for unreadable input (one line naming the row
+and column), 130 on Ctrl-C. ``--report FILE.md|FILE.html`` writes a report with a figure of the
+rows over the references (Markdown: the figure beside it as ``FILE.png``; HTML: embedded); its
+path and format are checked before any work. Light at start: numpy, matplotlib and the solvers
+load only inside the command.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+from pathlib import Path
+
+__all__ = ["add_check_parser", "cmd_check", "write_report"]
+
+
+def cmd_check(args):
+    from lubrication.cli_contract import options_named
+
+    from .check import check_results
+    with options_named({"map": "--map"}, args):
+        report = check_results(args.file, bem=not args.no_bem, solution_map=args.map)
+    out = {"command": "check", "converged": True, **report.to_dict()}
+    if args.report:
+        write_report(report, args.report)
+    return out, report.format_table()
+
+
+# --------------------------------------------------------------------------- the report
+
+def _blocks(report, figure: str) -> list:
+    """The report as blocks (``("h1"|"h2"|"p", text)``, ``("table", head, rows)``,
+    ``("ul", items)``, ``("img", name)``), rendered by :func:`_markdown` or :func:`_html`."""
+    from lubrication.cli_contract import format_value
+    counts = ", ".join(f"{n} {v}" for v, n in report.counts.items())
+    prov = report.provenance
+    blocks = [("h1", f"Consistency check of {report.source}"),
+              ("p", f"Verdict: {report.verdict.value.upper()} ({counts} rows). Solution map: "
+                    f"{report.map_source}. vesicle-tube {prov.get('vesicle-tube', '?')}, "
+                    f"commit {prov.get('git_commit', '?')}, {prov.get('date', '')}."),
+              ("p", "Rule: " + _rule())]
+    if report.assumptions:
+        blocks.append(("ul", [f"Assumption: {a}" for a in report.assumptions]))
+    blocks += [("h2", "Rows"),
+               ("table", ("row", "name", "kind", "verdict", "checks not passed"),
+                [(r.row.index, r.row.name, r.row.kind, r.verdict.value,
+                  "; ".join(f"{c.name} ({c.verdict.value})" for c in r.checks
+                            if c.verdict.value != "pass")) for r in report.rows]),
+               ("h2", "Figure"), ("img", figure),
+               ("h2", "Checks"),
+               ("table", ("row", "check", "verdict", "value", "reference", "deviation",
+                          "tolerance", "reference used", "why valid here"),
+                [(r.row.index, c.name, c.verdict.value, *(format_value(x) for x in (
+                    c.value, c.reference, c.deviation, c.tolerance)), c.source,
+                  c.why + (f" ({c.note})" if c.note else ""))
+                 for r in report.rows for c in r.checks])]
+    notes = [f"row {r.row.index}: {n}" for r in report.rows for n in r.notes]
+    if notes:
+        blocks += [("h2", "Notes"), ("ul", notes)]
+    return blocks
+
+
+def _rule() -> str:
+    from .check import TOLERANCE_RULE
+    return TOLERANCE_RULE
+
+
+def _markdown(blocks) -> str:
+    def cell(x) -> str:
+        return str(x).replace("|", "\\|").replace("\n", " ")
+    lines = []
+    for kind, *rest in blocks:
+        if kind in ("h1", "h2"):
+            lines += [("# " if kind == "h1" else "## ") + rest[0], ""]
+        elif kind == "p":
+            lines += [rest[0], ""]
+        elif kind == "ul":
+            lines += [f"- {item}" for item in rest[0]] + [""]
+        elif kind == "img":
+            lines += [f"![V/U and extra pressure drop of the rows over the references]"
+                      f"({rest[0]})", ""]
+        else:
+            head, rows = rest
+            lines += ["| " + " | ".join(map(cell, head)) + " |",
+                      "|" + "---|" * len(head)]
+            lines += ["| " + " | ".join(map(cell, row)) + " |" for row in rows] + [""]
+    return "\n".join(lines)
+
+
+def _html(blocks, png: bytes) -> str:
+    e = html.escape
+    parts = ["<!DOCTYPE html>", '<html><head><meta charset="utf-8">',
+             f"<title>{e(blocks[0][1])}</title>",
+             "<style>body{font-family:sans-serif;max-width:80em;margin:auto}"
+             "table{border-collapse:collapse;font-size:90%}td,th{border:1px solid #ccc;"
+             "padding:2px 6px}</style></head><body>"]
+    for kind, *rest in blocks:
+        if kind in ("h1", "h2", "p"):
+            parts.append(f"<{kind}>{e(rest[0])}</{kind}>")
+        elif kind == "ul":
+            parts.append("<ul>" + "".join(f"<li>{e(str(i))}</li>" for i in rest[0]) + "</ul>")
+        elif kind == "img":
+            data = base64.b64encode(png).decode("ascii")
+            parts.append(f'<img alt="V/U and extra pressure drop of the rows over the '
+                         f'references" src="data:image/png;base64,{data}">')
+        else:
+            head, rows = rest
+            parts.append("<table><tr>" + "".join(f"<th>{e(str(h))}</th>" for h in head)
+                         + "</tr>" + "".join("<tr>" + "".join(f"<td>{e(str(c))}</td>"
+                                                              for c in row) + "</tr>"
+                                             for row in rows) + "</table>")
+    return "\n".join(parts + ["</body></html>", ""])
+
+
+def write_report(report, path) -> Path:
+    """Write ``report`` (a :class:`~correlations.check.CheckReport`) as Markdown (``.md``,
+    ``.markdown``; the figure beside it as ``<stem>.png``) or HTML (``.html``, ``.htm``; the
+    figure embedded), each file atomically. Returns the report's path."""
+    import matplotlib.pyplot as plt
+
+    from lubrication.io import atomic_write
+
+    from .plotting import plot_check
+    path = Path(path)
+    ax = plot_check(report)
+    buffer = io.BytesIO()
+    try:
+        ax.figure.savefig(buffer, format="png", dpi=120, bbox_inches="tight")
+    finally:
+        plt.close(ax.figure)
+    png = buffer.getvalue()
+    figure = path.with_suffix(".png")
+    if path.suffix.lower() in (".html", ".htm"):
+        text = _html(_blocks(report, figure.name), png)
+    else:
+        atomic_write(figure, lambda f: f.write(png), binary=True)
+        text = _markdown(_blocks(report, figure.name))
+    return atomic_write(path, lambda f: f.write(text))
+
+
+def add_check_parser(subparsers) -> None:
+    """Add ``check`` to the subcommands."""
+    p = subparsers.add_parser(
+        "check", help="check results (CSV or JSON rows: your V/U, dp+, length, film) against "
+                      "the physics and our references")
+    p.add_argument("file", metavar="FILE",
+                   help="CSV (header row, comma-separated) or JSON (a list of objects or "
+                        '{"rows": [...]}); columns: docs/user-guide.md "Checking your results"')
+    p.add_argument("--report", metavar="FILE.md|FILE.html",
+                   help="also write a report with a figure of the rows over the references "
+                        "(Markdown: the figure as FILE.png beside it; HTML: embedded)")
+    p.add_argument("--no-bem", action="store_true",
+                   help="skip the BEM references of sphere and drop rows (about a second per "
+                        "(lam, Ca)); the small-object laws remain where valid")
+    p.add_argument("--map", metavar="FILE",
+                   help="packed solution map of the vesicle references (default: the shipped "
+                        "correlations/data/solution_map.json)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.set_defaults(func=cmd_check)
