@@ -356,15 +356,6 @@ class Row:
     def get(self, key, default=None):
         return self.values.get(key, default)
 
-    @property
-    def dp_plus_R0(self):
-        """Δp⁺R0/(ηU), given or λ × the given Δp⁺R/(ηU); None if neither is given."""
-        if "dp_plus_R0" in self.values:
-            return self.values["dp_plus_R0"]
-        if "dp_plus_R" in self.values:
-            return self.values["dp_plus_R"] * self.values["lam"]
-        return None
-
 
 def _text(where: str, column: str, cell, choices=None) -> str | None:
     if cell is None or (isinstance(cell, str) and not cell.strip()):
@@ -864,13 +855,14 @@ def _dp(row: Row) -> tuple[str, float, float, float]:
     """The row's extra pressure drop as given: (column, value, uncertainty, factor from
     Δp⁺R0/(ηU) to it), dp_plus_R0 when given, else dp_plus_R."""
     key = "dp_plus_R0" if "dp_plus_R0" in row.values else "dp_plus_R"
-    return key, row.values[key], row.errors[key], 1.0 if key == "dp_plus_R0" else 1.0 / row.get("lam")
+    factor = 1.0 if key == "dp_plus_R0" else 1.0 / row.get("lam")
+    return key, row.values[key], row.errors[key], factor
 
 
 def _dp_R0(row: Row) -> tuple[float, float]:
     """Δp⁺R0/(ηU) and its uncertainty (from dp_plus_R with λ's rounding when only it is given)."""
-    key, value, err, factor = _dp(row)
-    if factor == 1.0:
+    key, value, err, _ = _dp(row)
+    if key == "dp_plus_R0":
         return value, err
     lam = row.get("lam")
     return value * lam, err * lam + abs(value) * row.errors.get("lam", 0.0)

@@ -103,6 +103,31 @@ def test_ctrl_c_stops_every_long_command(argv, working_s):
     _assert_clean_stop(argv, code, seconds, err)
 
 
+def test_ctrl_c_stops_a_check_while_it_solves_its_bem_references(tmp_path):
+    """``vesicle-tube check`` of drop rows solves a BEM drop per row (seconds each) before it
+    writes its report: interrupted meanwhile, it stops and has written nothing."""
+    rows = tmp_path / "drops.csv"
+    rows.write_text("kind,lam,ca,V_over_U,dp_plus_R\n" + "".join(
+        f"drop,0.8,{ca},1.5,1.5\n" for ca in (0.05, 0.1, 0.2, 0.3, 0.5)))
+    out = tmp_path / "out"
+    out.mkdir()
+    argv = ["check", str(rows), "--report", str(out / "report.md")]
+    code, seconds, err = _interrupt(argv, 4.0)
+    _assert_clean_stop(argv, code, seconds, err, out)
+    assert not any(out.iterdir())
+
+
+def test_a_closed_pipe_ends_a_check_quietly(tmp_path):
+    rows = tmp_path / "rows.csv"
+    rows.write_text("nu,lam,V_over_U,dp_plus_R0\n" + "0.9,1.0,1.25,15\n" * 200)
+    proc = subprocess.Popen([_exe(), "check", str(rows)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) in (0, 1, 141), err
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
+
+
 @pytest.mark.parametrize("argv", [["estimate"], ["geometry", "--nu", "0.6", "--lam", "1.9"]])
 def test_a_closed_pipe_ends_quietly(argv):
     """``vesicle-tube estimate | head -0``: the reader is gone before the table is printed; no
