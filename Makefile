@@ -28,6 +28,7 @@ benchmark: $(BIN)/vesicle-tube
 	$(BIN)/python tests/benchmarks/run_benchmarks.py
 	$(BIN)/python tests/benchmarks/bench_vesicle.py
 	$(BIN)/python tests/benchmarks/bench_solution_map.py
+	$(BIN)/python tests/benchmarks/bench_check.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info
