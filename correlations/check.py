@@ -78,7 +78,8 @@ from lubrication.geometry import (cell_from_volume_area, check_reduced_volume,
                                   confinement_from_diameter, critical_confinement, volume_radius)
 
 __all__ = ["COLUMNS", "ERROR_COLUMNS", "KINDS", "WARN_FACTOR", "Verdict", "InputError", "Row",
-           "Reference", "CheckResult", "RowReport", "CheckReport", "read_rows", "parse_row",
+           "Reference", "CheckResult", "RowReport", "CheckReport", "TOLERANCE_RULE", "format_cell",
+           "read_rows", "parse_row",
            "parse_rows", "map_reference", "near_critical_reference", "small_object_reference",
            "sphere_reference", "drop_reference", "film_upper_bound", "film_lower_bound",
            "length_lower_bound", "chen_film_scaling_check", "shape_volume_area_checks",
@@ -1130,7 +1131,6 @@ class CheckReport:
     def format_table(self) -> str:
         """A fixed-width table, one line per check (row, check, verdict, value, reference,
         deviation, tolerance, reference used), then the notes of the rows and a summary."""
-        from lubrication.cli_contract import format_value
         head = ("row", "check", "verdict", "value", "reference", "deviation", "tolerance",
                 "reference used")
         cells = [head]
@@ -1138,7 +1138,7 @@ class CheckReport:
             label = str(r.row.index) + (f" {r.row.name}" if r.row.name else "")
             for c in r.checks:
                 cells.append((label, c.name, c.verdict.value.upper() if c.verdict is not
-                              Verdict.PASS else "pass", *(format_value(x) for x in (
+                              Verdict.PASS else "pass", *(format_cell(x) for x in (
                                   c.value, c.reference, c.deviation, c.tolerance)), c.source))
         widths = [max(len(str(line[i])) for line in cells) for i in range(len(head) - 1)]
         lines = []
@@ -1154,6 +1154,14 @@ class CheckReport:
                           *[f"assumption: {a}" for a in self.assumptions],
                           f"rule: {TOLERANCE_RULE}",
                           f"rows: {counts}; verdict: {self.verdict.value.upper()}"])
+
+
+def format_cell(x) -> str:
+    """A value of a check in a table: 6 significant digits (enough to see a deviation of
+    1e-4 relative), "—" when there is none."""
+    if x is None:
+        return "—"
+    return f"{x:.6g}" if isinstance(x, float) else str(x)
 
 
 #: The tolerance and verdict rule in one line (reports and tables print it).
@@ -1295,11 +1303,10 @@ def assert_consistent(rows_or_path, *, allow_warnings: bool = True, **options) -
     report = check_results(rows_or_path, **options)
     bad = report.failures(include_warnings=not allow_warnings)
     if bad:
-        from lubrication.cli_contract import format_value
         lines = [f"{r.row.where}{' ' + r.row.name if r.row.name else ''}: {c.name} "
-                 f"{c.verdict.value.upper()}: value {format_value(c.value)}, reference "
-                 f"{format_value(c.reference)} ({c.source}), deviation "
-                 f"{format_value(c.deviation)}, tolerance {format_value(c.tolerance)}"
+                 f"{c.verdict.value.upper()}: value {format_cell(c.value)}, reference "
+                 f"{format_cell(c.reference)} ({c.source}), deviation "
+                 f"{format_cell(c.deviation)}, tolerance {format_cell(c.tolerance)}"
                  for r, c in bad]
         raise AssertionError(f"{len({id(r) for r, _ in bad})} of {len(report.rows)} rows not "
                              f"consistent ({report.source}):\n" + "\n".join(lines))

@@ -36,14 +36,14 @@ def cmd_check(args):
 def _blocks(report, figure: str) -> list:
     """The report as blocks (``("h1"|"h2"|"p", text)``, ``("table", head, rows)``,
     ``("ul", items)``, ``("img", name)``), rendered by :func:`_markdown` or :func:`_html`."""
-    from lubrication.cli_contract import format_value
+    from .check import TOLERANCE_RULE, format_cell
     counts = ", ".join(f"{n} {v}" for v, n in report.counts.items())
     prov = report.provenance
     blocks = [("h1", f"Consistency check of {report.source}"),
               ("p", f"Verdict: {report.verdict.value.upper()} ({counts} rows). Solution map: "
                     f"{report.map_source}. vesicle-tube {prov.get('vesicle-tube', '?')}, "
                     f"commit {prov.get('git_commit', '?')}, {prov.get('date', '')}."),
-              ("p", "Rule: " + _rule())]
+              ("p", "Rule: " + TOLERANCE_RULE)]
     if report.assumptions:
         blocks.append(("ul", [f"Assumption: {a}" for a in report.assumptions]))
     blocks += [("h2", "Rows"),
@@ -55,7 +55,7 @@ def _blocks(report, figure: str) -> list:
                ("h2", "Checks"),
                ("table", ("row", "check", "verdict", "value", "reference", "deviation",
                           "tolerance", "reference used", "why valid here"),
-                [(r.row.index, c.name, c.verdict.value, *(format_value(x) for x in (
+                [(r.row.index, c.name, c.verdict.value, *(format_cell(x) for x in (
                     c.value, c.reference, c.deviation, c.tolerance)), c.source,
                   c.why + (f" ({c.note})" if c.note else ""))
                  for r in report.rows for c in r.checks])]
@@ -63,11 +63,6 @@ def _blocks(report, figure: str) -> list:
     if notes:
         blocks += [("h2", "Notes"), ("ul", notes)]
     return blocks
-
-
-def _rule() -> str:
-    from .check import TOLERANCE_RULE
-    return TOLERANCE_RULE
 
 
 def _markdown(blocks) -> str:

@@ -315,10 +315,17 @@ def test_chen_table_i_at_ca_0p3_is_flagged_where_it_is_off():
 
 
 @pytest.mark.slow
-def test_chen_table_i_verdicts():
+def test_chen_table_i_verdicts(cli):
     """All five rows: V/U passes at 0.1 %; dp+ fails at Ca = 0.3 and 0.5 (+0.78 %, +0.45 %)
-    and warns at Ca <= 0.2 (-0.19 to -0.24 %, within 3 x 0.1 %)."""
+    and warns at Ca <= 0.2 (-0.19 to -0.24 %, within 3 x 0.1 %). The worked example of
+    docs/user-guide.md, docs/data/chen2020_table1.csv (the *_err columns: 0.1 % to two
+    digits), gives the same verdicts on the command line (exit 1)."""
     _assert_chen(sorted(CHEN_TABLE_I))
+    code, out, err = cli("check", str(ROOT / "docs" / "data" / "chen2020_table1.csv"), "--json")
+    assert code == 1, err
+    for ca, row in zip(sorted(CHEN_TABLE_I), strict_json(out)["rows"]):
+        got = {c["name"]: c["verdict"] for c in row["checks"]}
+        assert (got["V/U vs reference"], got["dp+R vs reference"]) == CHEN_VERDICTS["stated"][ca]
 
 
 # ----------------------------------------------------------------------------- the rules
