@@ -77,6 +77,8 @@ from lubrication.checks import InvalidParameterError, OutOfRangeWarning, check_r
 from lubrication.geometry import (cell_from_volume_area, check_reduced_volume,
                                   confinement_from_diameter, critical_confinement, volume_radius)
 
+from .registry import MAP_DEFAULT_CA_B
+
 __all__ = ["COLUMNS", "ERROR_COLUMNS", "KINDS", "WARN_FACTOR", "Verdict", "InputError", "Row",
            "Reference", "CheckResult", "RowReport", "CheckReport", "TOLERANCE_RULE", "format_cell",
            "read_rows", "parse_row",
@@ -142,8 +144,9 @@ WARN_FACTOR = 3.0
 #: the lubrication points carry none): the refinement tolerance tol = 1e-4 of
 #: bem.vesicle.solve_vesicle with which the map points are built (map_build.DEFAULT_OPTIONS).
 MAP_UNKNOWN_SOLVER_RTOL = 1e-4
-#: Ca_B at which the map is queried when a vesicle row gives none (Chen et al. 2020's value).
-DEFAULT_CA_B = 50.0
+#: Ca_B at which the map is queried when a vesicle row gives none: 50, Chen et al. 2020's value,
+#: as in the estimate.
+DEFAULT_CA_B = MAP_DEFAULT_CA_B
 #: eq. asmyp1: the error is the slope's difference from the lubrication slope 1 (physics notes
 #: §4) plus the next term K δ^(3/2) of V/U = 1 + δ − kδ^(3/2); k ≤ 2.0 measured on every
 #: converged map point with δ ≤ 0.1 (ν 0.6-0.98, Ca_B 5-500, BEM and lubrication).
@@ -530,23 +533,18 @@ class _NoMap(str):
 
 
 def _resolve_map(choice):
-    """The map to read: None the shipped one, False none, a path or a SolutionMap; the
-    reason (:class:`_NoMap`) when there is none. A path that is not a map raises
-    InvalidParameterError (``map``)."""
-    from .solution_map import DEFAULT_MAP, SolutionMap, load_map
-    if isinstance(choice, (SolutionMap, _NoMap)):
+    """The map to read: None the shipped one, False none, a path or a SolutionMap (as the
+    estimate's map rows, :mod:`correlations.registry`); the reason (:class:`_NoMap`) when there
+    is none. A path that is not a map raises InvalidParameterError (``map``)."""
+    from .registry import MethodNotApplicable, _solution_map
+    if isinstance(choice, _NoMap):
         return choice
     if choice is False:
         return _NoMap("the solution map is switched off")
-    if choice is None and not DEFAULT_MAP.exists():
-        return _NoMap(f"no solution map shipped ({DEFAULT_MAP} absent)")
-    return load_map(choice)
-
-
-@functools.lru_cache(maxsize=8192)
-def _query(nu: float, ratio: float, ca_b: float, m):
-    from .solution_map import query_map
-    return query_map(nu, ratio, ca_b, m)
+    try:
+        return _solution_map(choice)
+    except MethodNotApplicable as exc:
+        return _NoMap(str(exc))
 
 
 def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
@@ -564,7 +562,7 @@ def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
     ``quantity``: ``V_over_U``, ``dp_plus_R0``, ``ell``, ``film_min`` or ``shape_class``;
     ``solution_map`` as in :func:`check_results`.
     """
-    from .registry import map_method_name
+    from .registry import _map_query, map_method_name
     from .solution_map import outside_reason
     m = _resolve_map(solution_map)
     if isinstance(m, _NoMap):
@@ -573,7 +571,7 @@ def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
     reason = outside_reason(m, nu, ratio, ca_b)
     if reason:
         return f"outside the solution map ({reason})"
-    v = _query(nu, ratio, ca_b, m).quantities[quantity]
+    v = _map_query(nu, ratio, ca_b, m).quantities[quantity]
     if v.value is None:
         return f"solution map: {v.note}"
     source = f"solution map, {map_method_name(v.methods)}"
@@ -590,7 +588,7 @@ def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
         notes.append(f"solver error unknown: {MAP_UNKNOWN_SOLVER_RTOL:g} x value used")
     if v.model_error is None:
         w = (None if ca_b == DEFAULT_CA_B or outside_reason(m, nu, ratio, DEFAULT_CA_B)
-             else _query(nu, ratio, DEFAULT_CA_B, m).quantities[quantity])
+             else _map_query(nu, ratio, DEFAULT_CA_B, m).quantities[quantity])
         if w is None or w.value is None or w.model_error is None:
             return f"solution map: lubrication model error unknown at Ca_B={ca_b:g}"
         stand_in = w.model_error / abs(w.value) * abs(v.value) + abs(v.value - w.value)

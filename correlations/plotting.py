@@ -109,13 +109,14 @@ def plot_check(report, ax=None):
     Parameters
     ----------
     report : correlations.check.CheckReport
-    ax : sequence of two matplotlib Axes, optional
-        Axes for V/U and Δp⁺; a new headless figure with two panels if None.
+        The checked rows.
+    ax : pair of matplotlib Axes, optional
+        Where to draw V/U and Δp⁺ (default: two panels of a new headless figure).
 
     Returns
     -------
     ax : matplotlib.axes.Axes
-        The V/U panel (``ax.figure`` holds both).
+        The V/U panel; its ``figure`` holds the two.
 
     Examples
     --------
