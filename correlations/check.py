@@ -26,7 +26,7 @@ Checks, in the order they are made (module constants hold the measured numbers)
 ---------------------------------------------------------------------------------
 1. **Hard bounds** (verdict fail when violated by more than the row's uncertainty, warn when
    within it): λ < λc(ν) (vesicle; λ < 1 for a rigid sphere; none for a drop, which deforms
-   into a slug); 1 ≤ V/U < 2 (between the mean and the centreline velocity,
+   into a slug; λ ≥ λc as given fails and leaves only the bounds); 1 ≤ V/U < 2 (between the mean and the centreline velocity,
    :data:`lubrication.checks.OUTPUT_BOUNDS`); Δp⁺ > 0 (extra dissipation of a force-free
    object at fixed flow rate); 0 < h/R ≤ δ for a vesicle (:func:`film_upper_bound`) and
    h/R ≥ 1 − √2 λ_A (:func:`film_lower_bound`); ℓ ≥ (4/3)λ³/(1 − h/R)²
@@ -81,7 +81,7 @@ from .registry import MAP_DEFAULT_CA_B
 
 __all__ = ["COLUMNS", "ERROR_COLUMNS", "KINDS", "WARN_FACTOR", "Verdict", "InputError", "Row",
            "Reference", "CheckResult", "RowReport", "CheckReport", "TOLERANCE_RULE", "format_cell",
-           "read_rows", "parse_row",
+           "REQUIRED", "read_rows", "parse_row",
            "parse_rows", "map_reference", "near_critical_reference", "small_object_reference",
            "sphere_reference", "drop_reference", "film_upper_bound", "film_lower_bound",
            "length_lower_bound", "chen_film_scaling_check", "shape_volume_area_checks",
@@ -138,8 +138,9 @@ _NEEDS = {"V_mm_s": "U_mm_s", "dp_plus_Pa": "U_mm_s, eta_mpas and the volume rad
 #: verdict factor: warn up to this many tolerances, fail beyond
 WARN_FACTOR = 3.0
 
-# ---- tolerances of the references (measured numbers: tests/correlations/test_check.py checks
-# ---- that our own converged solutions pass with them)
+# ---- tolerances of the references: measured on our own solutions by
+# ---- tests/benchmarks/check_tolerances.py; tests/correlations/test_check.py checks that our
+# ---- converged solutions pass with them
 #: Stand-in relative solver error of a map value whose solver part is unknown (ell, film_min and
 #: the lubrication points carry none): the refinement tolerance tol = 1e-4 of
 #: bem.vesicle.solve_vesicle with which the map points are built (map_build.DEFAULT_OPTIONS).
@@ -167,13 +168,13 @@ CHEN_FILM_SCALING_RTOL = 0.35
 SHAPE_RANGE_DELTA = 0.05
 SHAPE_VOLUME_BAND = (0.43, 0.17)
 SHAPE_AREA_BAND = (0.21, 0.15)
-#: The transition line of Chen et al. 2020 lies within 0.05 in ν of the parachute-bullet
-#: brackets of our map (lines at Ca_B = 15 and 50): the tolerance of a class disagreeing with
-#: the line, in ν − ν_T.
+#: The transition line of Chen et al. 2020 lies within 0.049 in ν of both ends of the
+#: parachute-bullet brackets of our map (BEM lines at Ca_B = 15 and 50): the tolerance of a
+#: class disagreeing with the line, in ν − ν_T.
 TRANSITION_BAND_NU = 0.05
 #: Small rigid sphere: V/U = 2 − (4/3)λ² + c_V λ⁵, Δp⁺a/(ηU) = 16λ⁶(1 + c_P λ⁵); our BEM sphere
 #: (tol 1e-10) gives c_V = 0.32-0.42 and c_P = 1.40-1.82 for λ = 0.05-0.5: the next terms
-#: are taken as K λ⁵ with these K.
+#: are taken as K λ⁵ with K = 1 and 2.
 SMALL_SPHERE_SPEED_K, SMALL_SPHERE_DP_K = 1.0, 2.0
 #: Small clean drop (Hetsroni et al. 1970, viscosity ratio 1): |V/U − (2 − 0.8λ²)| <= 0.48λ⁵ and
 #: |Δp⁺/(4.8λ⁶) − 1| <= 2.7λ⁵ measured with our BEM for λ <= 0.5 and Ca <= 0.5 (the drop
@@ -390,14 +391,79 @@ class _Named:
         return False
 
 
-def parse_row(cells: dict, index: int = 1, where: str | None = None) -> Row:
+def _convert_physical(where: str, kind: str, cells: dict, raw: dict, values: dict,
+                      errors: dict) -> list[str]:
+    """Add to ``values`` and ``errors`` the dimensionless quantities given by physical columns
+    (:data:`COLUMNS`, :func:`correlations.estimate.physical_scales`); returns their names.
+    ``raw``: column -> (value, rounding) of the row's numbers."""
+    from .estimate import PHYSICAL_BOUNDS, physical_scales
+    physical = {c: raw[c][0] for c in _PHYSICAL_INPUTS if c in raw}
+    with _Named(where, {v: k for k, v in _PHYSICAL_INPUTS.items() if v}):
+        for column, bound_name in _PHYSICAL_INPUTS.items():
+            if column in physical and bound_name is not None:
+                lo, hi, reason = PHYSICAL_BOUNDS[bound_name]
+                check_range(bound_name, physical[column], lo, hi, reason=reason)
+    converted = []
+
+    def take(quantity: str, value: float, error: float, sources: str):
+        if quantity in values:
+            raise InputError(where, quantity, cells[quantity], f"either {quantity} or {sources}",
+                             "both are given")
+        values[quantity], errors[quantity] = value, error
+        converted.append(quantity)
+
+    R0 = d = None
+    with _Named(where, {"volume": "volume_fl", "R0_um": "volume_fl"}):
+        if "volume_fl" in physical:
+            R0 = float(volume_radius(physical["volume_fl"]))
+            if kind == "vesicle" and "area_um2" in physical:
+                take("nu", float(cell_from_volume_area(physical["volume_fl"],
+                                                       physical["area_um2"])[0]), 0.0,
+                     "volume_fl with area_um2")
+        elif "area_um2" in physical:
+            raise InputError(where, "area_um2", cells["area_um2"], "volume_fl beside it",
+                             "the reduced volume needs both the volume and the area")
+        if "diameter_um" in physical:
+            d = physical["diameter_um"]
+            if R0 is not None:
+                take("lam", float(confinement_from_diameter(R0, d)), 0.0,
+                     "volume_fl with diameter_um")
+    if values.get("lam", 1.0) <= 0:
+        raise InputError(where, "lam", cells["lam"], "lam > 0")
+    if "lam" in values and (R0 is None) != (d is None):
+        R0, d = (values["lam"] * d / 2.0, d) if R0 is None else (R0, 2.0 * R0 / values["lam"])
+    scale = ({"V_mm_s": physical["U_mm_s"]} if "U_mm_s" in physical else {})
+    if R0 is not None and d is not None:
+        scale = physical_scales(R0, d, physical.get("U_mm_s"), physical.get("eta_mpas"),
+                                physical.get("kappa_j") if kind == "vesicle" else None)
+    for quantity, column in _CONVERTED.items():
+        if column in raw:
+            if column not in scale:
+                raise InputError(where, column, cells[column], f"{_NEEDS[column]} beside it",
+                                 f"needed to convert it to {quantity}")
+            take(quantity, raw[column][0] / scale[column], errors[column] / scale[column], column)
+    if kind == "vesicle" and "kappa_j" in physical:
+        if "ca_b" not in scale:
+            raise InputError(where, "kappa_j", cells["kappa_j"], "U_mm_s, eta_mpas and the "
+                             "volume radius beside it", "needed to compute ca_b")
+        take("ca_b", scale["ca_b"], 0.0, "kappa_j with U_mm_s and eta_mpas")
+    return converted
+
+
+#: Columns a row of each kind must give (directly or through physical columns).
+REQUIRED = {"vesicle": ("nu", "lam", "V_over_U", "dp_plus_R0"),
+            "sphere": ("lam", "V_over_U", "dp_plus_R0"), "drop": ("lam", "V_over_U", "dp_plus_R0")}
+
+
+def parse_row(cells: dict, index: int = 1, where: str | None = None,
+              required: dict | None = None) -> Row:
     """One raw row (column -> cell) as a checked :class:`Row` (columns: :data:`COLUMNS`).
 
     Physical columns are converted (module docstring); a dimensionless value and the physical
-    columns that would give it may not both be given. Raises :class:`InputError` naming the row
-    and the column for anything it cannot use.
+    columns that would give it may not both be given. ``required``: the columns each kind must
+    give (default :data:`REQUIRED`; ``dp_plus_R0`` is also met by ``dp_plus_R``). Raises
+    :class:`InputError` naming the row and the column for anything it cannot use.
     """
-    from .estimate import PHYSICAL_BOUNDS, physical_scales
     where = where or f"row {index}"
     for column in cells:
         if column not in COLUMNS and column not in ERROR_COLUMNS:
@@ -424,76 +490,17 @@ def parse_row(cells: dict, index: int = 1, where: str | None = None) -> Row:
     values = {c: v for c, (v, _) in raw.items() if COLUMNS.get(c, ("",))[0] in ("input", "output")}
     errors = {c: raw[f"{c}_err"][0] if f"{c}_err" in raw else rounding
               for c, (_, rounding) in raw.items() if not c.endswith("_err")}
-    physical = {c: raw[c][0] for c in _PHYSICAL_INPUTS if c in raw}
-    with _Named(where, {v: k for k, v in _PHYSICAL_INPUTS.items() if v}):
-        for column, bound_name in _PHYSICAL_INPUTS.items():
-            if column in physical and bound_name is not None:
-                lo, hi, reason = PHYSICAL_BOUNDS[bound_name]
-                check_range(bound_name, physical[column], lo, hi, reason=reason)
-    converted = []
-
-    def conflict(quantity: str, sources: str):
-        if quantity in values:
-            raise InputError(where, quantity, cells[quantity], f"either {quantity} or {sources}",
-                             "both are given")
-        converted.append(quantity)
-
-    R0 = d = None
-    with _Named(where, {"volume": "volume_fl", "R0_um": "volume_fl"}):
-        if "volume_fl" in physical:
-            R0 = float(volume_radius(physical["volume_fl"]))
-            if kind == "vesicle" and "area_um2" in physical:
-                conflict("nu", "volume_fl with area_um2")
-                values["nu"] = float(cell_from_volume_area(physical["volume_fl"],
-                                                           physical["area_um2"])[0])
-                errors["nu"] = 0.0
-        elif "area_um2" in physical:
-            raise InputError(where, "area_um2", cells["area_um2"], "volume_fl beside it",
-                             "the reduced volume needs both the volume and the area")
-        if "diameter_um" in physical:
-            d = physical["diameter_um"]
-            if R0 is not None:
-                conflict("lam", "volume_fl with diameter_um")
-                values["lam"], errors["lam"] = float(confinement_from_diameter(R0, d)), 0.0
-    if "lam" in values:
-        if values["lam"] <= 0:
-            raise InputError(where, "lam", cells.get("lam", values["lam"]), "lam > 0")
-        if R0 is None and d is not None:
-            R0 = values["lam"] * d / 2.0
-        elif d is None and R0 is not None:
-            d = 2.0 * R0 / values["lam"]
-    scale = {}
-    if R0 is not None and d is not None:
-        scale = physical_scales(R0, d, physical.get("U_mm_s"), physical.get("eta_mpas"),
-                                physical.get("kappa_j") if kind == "vesicle" else None)
-    elif "U_mm_s" in physical:
-        scale = {"V_mm_s": physical["U_mm_s"]}
-    for quantity, column in _CONVERTED.items():
-        if column in raw:
-            if column not in scale:
-                raise InputError(where, column, cells[column], f"{_NEEDS[column]} beside it",
-                                 f"needed to convert it to {quantity}")
-            conflict(quantity, column)
-            values[quantity] = raw[column][0] / scale[column]
-            errors[quantity] = errors[column] / scale[column]
-    if kind == "vesicle" and "kappa_j" in physical:
-        if "ca_b" not in scale:
-            raise InputError(where, "kappa_j", cells["kappa_j"], "U_mm_s, eta_mpas and the "
-                             "volume radius beside it", "needed to compute ca_b")
-        conflict("ca_b", "kappa_j with U_mm_s and eta_mpas")
-        values["ca_b"] = scale["ca_b"]
-    required = {"vesicle": ("nu", "lam", "V_over_U"), "sphere": ("lam", "V_over_U"),
-                "drop": ("lam", "V_over_U")}[kind]
-    for column in required:
+    converted = _convert_physical(where, kind, cells, raw, values, errors)
+    for column in (required or REQUIRED)[kind]:
+        if column == "dp_plus_R0" and "dp_plus_R" in values:
+            continue
         if column not in values:
             source = {"nu": " (or volume_fl and area_um2)", "lam": " (or volume_fl and "
-                      "diameter_um)", "V_over_U": " (or V_mm_s and U_mm_s)"}[column]
+                      "diameter_um)", "V_over_U": " (or V_mm_s and U_mm_s)",
+                      "dp_plus_R0": " (or dp_plus_R, or dp_plus_Pa)"}.get(column, "")
             hint = " (a drop? set kind=drop)" if column == "nu" else ""
             raise InputError(where, column, None, f"a value{source}", f"required for a {kind}"
                              + hint)
-    if "dp_plus_R0" not in values and "dp_plus_R" not in values:
-        raise InputError(where, "dp_plus_R0", None, "a value of dp_plus_R0, dp_plus_R or "
-                         "dp_plus_Pa", f"the extra pressure drop is required for a {kind}")
     with _Named(where, {}):
         if "nu" in values:
             check_reduced_volume(values["nu"])
@@ -644,8 +651,9 @@ def small_object_reference(kind: str, lam: float, quantity: str, nu: float = 1.0
       (:data:`lubrication.asymptotics.SMALL_SPHERE_RANGE`).
     * vesicle, 0.9 ≤ ν < 1, λ ≤ 0.5 (Chen et al. 2020 §IV.C; registry SMALL_VESICLE_RANGE): the
       sphere's laws, error the sphere's plus (1 − ν) × the leading deviation ((4/3)λ²
-      resp. 16λ⁶): a vesicle at rest is not a sphere. Measured on our BEM (ν = 0.9-0.98, λ/λc
-      = 0.2-0.4) its effect is at most 0.4 (1 − ν) of the leading term.
+      resp. 16λ⁶): a vesicle at rest is not a sphere. On our BEM vesicles (ν = 0.9-0.98, λ/λc
+      = 0.2-0.4) the deviation beyond the sphere's next term is at most 0.2 (1 − ν) × the
+      leading term.
     * clean drop of viscosity ratio 1 (``kind`` drop): V/U = 2 − 0.8λ², Δp⁺R0/(ηU) = 4.8λ⁶
       (Hetsroni, Haber & Wacholder 1970), error :data:`SMALL_DROP_SPEED_K` λ⁵ resp.
       :data:`SMALL_DROP_DP_K` λ⁵ × 4.8λ⁶, measured with our BEM for λ ≤ 0.5, Ca ≤

@@ -452,7 +452,7 @@ def test_csv_and_json_give_the_same_rows(tmp_path):
     ({"nu": 0.9, "lam": 1.2, "V_over_U": "nan", "dp_plus_R0": 60}, "V_over_U", "finite"),
     ({"nu": 0.9, "lam": 1.2, "V_over_U": True, "dp_plus_R0": 60}, "V_over_U", "a number"),
     ({"lam": 0.8, "V_over_U": 1.45, "dp_plus_R": 2.25}, "nu", "kind=drop"),
-    ({"nu": 0.9, "lam": 1.2, "V_over_U": 1.1}, "dp_plus_R0", "required"),
+    ({"nu": 0.9, "lam": 1.2, "V_over_U": 1.1}, "dp_plus_R0", "dp_plus_Pa"),
     ({"nu": 0.9, "lam": 1.2, "V_over_U": 1.1, "dp_plus_R0": 60, "ca": 0.1}, "ca", "kind=drop"),
     ({"kind": "drop", "nu": 0.9, "lam": 0.8, "V_over_U": 1.4, "dp_plus_R0": 2}, "nu", "drop"),
     ({"kind": "blob", "lam": 0.8, "V_over_U": 1.4, "dp_plus_R0": 2}, "kind", "one of"),
