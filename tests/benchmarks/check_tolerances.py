@@ -51,8 +51,8 @@ def near_critical(points) -> None:
           f"{max(chen):.3f} (CHEN_FILM_SCALING_RTOL)")
     print(f"spherocylinder, delta <= 0.05: eps_V/delta {min(vol):.3f} to {max(vol):.3f}, "
           f"eps_A/delta {min(area):.3f} to {max(area):.3f} (SHAPE_VOLUME_BAND, SHAPE_AREA_BAND)")
-    print(f"film_min/delta <= {max(film):.3f} (film_upper_bound); ell/length bound >= "
-          f"{min(length):.3f} (length_lower_bound)")
+    print(f"film_min/delta {min(film):.3f} to {max(film):.3f} (film_upper_bound: <= 1); "
+          f"ell/length bound >= {min(length):.3f} (length_lower_bound: >= 1)")
 
 
 def small_vesicles(points) -> None:
