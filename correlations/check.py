@@ -908,15 +908,16 @@ def _bound_checks(row: Row) -> tuple[list[CheckResult], bool]:
                                  "object"))
     film = v.get("film_min")
     if film is not None:
-        if row.kind == "vesicle" and nu < 1.0:
-            top, top_source = film_upper_bound(nu, lam), "h/R <= 1 - lam/lam_c (film_upper_bound)"
+        if row.kind == "vesicle":
+            top, strict, top_source, why = (
+                film_upper_bound(nu, lam), False, "h/R <= 1 - lam/lam_c (film_upper_bound)",
+                "a membrane of this area and volume fits only a tube of radius above R0/lam_c")
         else:
-            top, top_source = 1.0, "h/R < 1 (the object has a size)"
+            top, strict, top_source, why = 1.0, True, "h/R < 1", "the object has a size"
         low = _bound("0 < h/R <= bound", "film_min", film, 0.0, e["film_min"], upper=False,
                      strict=True, source="h/R > 0", why="a steady object does not touch the wall")
         high = _bound("0 < h/R <= bound", "film_min", film, top, e["film_min"], upper=True,
-                      strict=False, source=top_source, why="a closed membrane of this area and "
-                      "volume fits only a tube of radius above R0/lam_c (film_upper_bound)")
+                      strict=strict, source=top_source, why=why)
         checks.append(_worse(low, high))
         if row.kind == "vesicle":
             checks.append(_bound("h/R >= 1 - sqrt(2) lam_A", "film_min", film,
@@ -1212,10 +1213,6 @@ def _row_checks(row: Row, bem: bool, solution_map) -> tuple[list, list, bool]:
     notes = []
     if not passes:
         return checks, ["references skipped: the object cannot be in this tube"], False
-    if row.kind == "vesicle" and row.get("nu") < 1.0 and "ca_b" not in row.values:
-        notes.append(f"ca_b not given: the solution map is read at Ca_B = {DEFAULT_CA_B:g} "
-                     "(Chen et al. 2020's value; shapes virtually independent of Ca_B >= 50, "
-                     "their §III.A)")
     for quantity in ("V_over_U", "dp_plus_R0", "ell", "film_min"):
         if quantity == "dp_plus_R0":
             key, value, err, factor = _dp(row)
@@ -1287,11 +1284,13 @@ def check_results(rows_or_path, *, bem: bool = True, solution_map=None) -> Check
     reports = tuple(RowReport(row, tuple(checks + trends.get(row.index, [])), tuple(notes))
                     for row, (checks, notes, _) in zip(rows, per_row))
     assumptions = []
-    default_ca = [r.index for r in rows if r.kind == "vesicle" and "ca_b" not in r.values]
+    default_ca = [r.index for r in rows if r.kind == "vesicle" and r.get("nu") < 1.0
+                  and "ca_b" not in r.values]
     if default_ca:
-        assumptions.append(f"{len(default_ca)} vesicle rows without ca_b: the map was read at "
-                           f"Ca_B = {DEFAULT_CA_B:g} (Chen et al. 2020 §III.A: shapes virtually "
-                           "independent of Ca_B >= 50)")
+        listed = ", ".join(map(str, default_ca[:10])) + (", ..." if len(default_ca) > 10 else "")
+        assumptions.append(f"{len(default_ca)} vesicle rows without ca_b (rows {listed}): the "
+                           f"map was read at Ca_B = {DEFAULT_CA_B:g} (Chen et al. 2020 §III.A: "
+                           "shapes virtually independent of Ca_B >= 50); give ca_b")
     if not bem and any(r.kind != "vesicle" or r.get("nu") == 1.0 for r in rows):
         assumptions.append("BEM references skipped (bem=False): spheres and drops are checked "
                            "against the small-object laws only, where they are valid")
