@@ -1115,6 +1115,8 @@ class CheckReport:
     map_source: str
     assumptions: tuple = ()
     provenance: dict = dataclasses.field(default_factory=dict)
+    #: the map the references were read from (a SolutionMap, or why there was none)
+    solution_map: object = dataclasses.field(default=None, repr=False, compare=False)
 
     @property
     def verdict(self) -> Verdict:
@@ -1294,7 +1296,7 @@ def check_results(rows_or_path, *, bem: bool = True, solution_map=None) -> Check
     if not bem and any(r.kind != "vesicle" or r.get("nu") == 1.0 for r in rows):
         assumptions.append("BEM references skipped (bem=False): spheres and drops are checked "
                            "against the small-object laws only, where they are valid")
-    return CheckReport(reports, source, map_source, tuple(assumptions), provenance())
+    return CheckReport(reports, source, map_source, tuple(assumptions), provenance(), m)
 
 
 def assert_consistent(rows_or_path, *, allow_warnings: bool = True, **options) -> CheckReport:

@@ -139,7 +139,7 @@ def plot_check(report, ax=None):
     for k, (nu, ca_b) in enumerate(series):
         lam = (1.0 - delta) * float(critical_confinement(nu))
         for panel, q in zip(ax, ("V_over_U", "dp_plus_R0")):
-            refs = [map_reference(nu, x, ca_b, q) for x in lam]
+            refs = [map_reference(nu, x, ca_b, q, report.solution_map) for x in lam]
             pts = [(x, r.value) for x, r in zip(lam, refs) if not isinstance(r, str)]
             if pts:
                 panel.plot(*zip(*pts), "-", color=f"C{4 + k}", lw=1,
