@@ -663,7 +663,8 @@ def small_object_reference(kind: str, lam: float, quantity: str, nu: float = 1.0
     from .registry import SMALL_VESICLE_RANGE
     if quantity not in ("V_over_U", "dp_plus_R0"):
         return f"no small-object law for {quantity}"
-    hi = asymptotics.SMALL_SPHERE_RANGE.bounds[0][2]
+    validity = asymptotics.SMALL_DROP_RANGE if kind == "drop" else asymptotics.SMALL_SPHERE_RANGE
+    hi = validity.bounds[0][2]
     if lam > hi:
         return f"not a small object (lam={lam:.3g} > {hi:g})"
     speed = quantity == "V_over_U"
@@ -687,7 +688,7 @@ def small_object_reference(kind: str, lam: float, quantity: str, nu: float = 1.0
     source = "small rigid sphere, Chen et al. 2020 eq. " + ("small1" if speed else "small2")
     why = f"lam={lam:.3g} <= {hi:g}; error: the next term K lam^5 (K measured, BEM sphere)"
     if nu < 1.0:
-        why = f"nu={nu:.3g} >= 0.9, " + why + f" + (1 - nu) x the leading deviation (asphericity)"
+        why = f"nu={nu:.3g} >= 0.9, {why} + (1 - nu) x the leading deviation (asphericity)"
     return Reference(value, error, source, why)
 
 
