@@ -25,7 +25,12 @@ Which method a node uses (the rule)
 At each grid node (ν, λ/λc, Ca_B) the map takes the BEM point if it converged, else the
 lubrication point if it converged, else the node is a hole (with both reasons). Lubrication is
 thus used only where BEM has no converged point, in practice next to λc where BEM is hardest
-and lubrication becomes exact (Secomb et al. 1986; Barakat & Shaqfeh 2018b). A lubrication
+and lubrication becomes exact (Secomb et al. 1986; Barakat & Shaqfeh 2018b). Below the largest
+λ/λc of a (ν, Ca_B) line with a converged BEM point, a node off the BEM grid (the
+lubrication-only nodes 0.92, 0.94, … between the BEM nodes 0.9, 0.95, 0.98) is left out of that line
+(:meth:`SolutionMap.superseded`): interpolating the BEM neighbours is more accurate there than
+lubrication, whose Δp⁺ is 5–15 % low at δ = 0.02–0.1 (tests/benchmarks/lubrication_overlap.py). A
+lubrication
 value carries a *model error*: the difference between lubrication and BEM measured at the
 largest λ/λc of the same (ν, Ca_B) line where both converged (the default grids overlap at
 λ/λc = 0.9–0.98 for this). Lubrication approaches the full Stokes solution as δ → 0, so the
@@ -61,10 +66,18 @@ Error bar
 ``interpolation_error``: at pack time every node is left out in turn along each axis and
 re-interpolated from the others (extrapolating at the ends of an axis); the difference is its
 leave-one-out (LOO) error on that axis, in the interpolated (transformed) variable. A query adds,
-over the axes it does not sit on, the largest LOO error of the nodes it uses (plus the weighted
-errors of the inner axes). LOO removes a node and so doubles the local spacing: for degree-2
-interpolation (error ∝ h³) it overestimates the error of the full grid, roughly eightfold in the
-interior, more at the ends. ``solver_error``: the solver's own error estimate (BEM refinement
+over the axes it does not sit on, the largest LOO error on that axis of the points at the
+corners of its grid cell (the nodes that bracket it on every axis; on each line the λ/λc nodes
+it uses), taking the corners at interior nodes of the axis where there are any (an end node's
+LOO is an extrapolation), plus the weighted errors of the inner axes. LOO removes a node and so
+doubles the local spacing: for degree-2 interpolation (error ∝ h³) it overestimates the error of
+the full grid, up to eightfold where the data are smooth and more next to a node; it is kept
+unscaled because the map also holds branch changes (at Ca_B ≤ 15 and λ/λc ≤ 0.3 the low-ν
+vesicles are elongated prolate shapes, parachutes above), where the LOO error is the honest
+one. Measured on a map with every other ν node, or λ/λc node, removed and queried at the removed
+nodes: the bar covers the true error at 84–100 % of them, median 4–10× it
+(docs/validation.md, solution map). Queries that used the largest LOO of all the nodes of their
+stencil (the first version) were 10–1000× the true error. ``solver_error``: the solver's own error estimate (BEM refinement
 pair |fine − coarse| for V/U, Δp⁺ and γ_max; none otherwise) propagated with the interpolation
 weights; None when a neighbour has none. ``model_error``: see the rule above (and the Ca_B clamp
 below). ``error`` = the sum of the known parts, in the quantity's units.
@@ -271,6 +284,13 @@ class SolutionMap:
         self._hole = {_key(h["nu"], h["lam_ratio"], h["ca_b"]) + (h["method"],): h["reason"]
                       for h in self.holes}
         self._overlap = {}
+        self._query = None       # the query being answered (quantity), None while packing
+        self._bem_top = {}       # (nu, Ca_B) -> largest lam_ratio with a converged BEM point
+        for m, nu, r, ca in zip(self.columns["method"], self.columns["nu"],
+                                self.columns["lam_ratio"], self.columns["ca_b"]):
+            if m == "bem":
+                k = _key(nu, ca)
+                self._bem_top[k] = max(self._bem_top.get(k, 0.0), float(r))
 
     # ---------------------------------------------------------------- nodes and the rule
     def node(self, nu: float, lam_ratio: float, ca_b: float) -> tuple[int | None, str]:
@@ -286,6 +306,15 @@ class SolutionMap:
             reasons.append(f"{method}: {self._hole.get(k, 'not computed')}")
         why = "; ".join(reasons) or "no point"
         return None, f"hole at nu={nu:.6g}, lam/lam_c={lam_ratio:.6g}, Ca_B={ca_b:.6g} ({why})"
+
+    def superseded(self, nu: float, lam_ratio: float, ca_b: float) -> bool:
+        """True at a node that is not on the BEM grid (a lubrication-only λ/λc) and lies below
+        the largest λ/λc of its (ν, Ca_B) line with a converged BEM point: there the line is
+        interpolated between BEM points and the node is left out (module docstring, the rule).
+        A failed BEM point on the BEM grid stays a hole."""
+        if round(lam_ratio, 9) in self._on_grid.get("bem", ()):
+            return False
+        return lam_ratio < self._bem_top.get(_key(nu, ca_b), 0.0) - _ON_NODE
 
     def value(self, row: int, q: str):
         v = self.columns[q][row]
@@ -323,15 +352,43 @@ class SolutionMap:
             return float(err) / base if base > 0 else None
         return float(err) * delta ** t["power"]
 
+    def _bracket(self, coords, x) -> set:
+        """The node coordinates around x (the node itself when x is on one)."""
+        on = [v for v in coords if abs(v - x) <= _ON_NODE * max(1.0, abs(x))]
+        if on:
+            return set(on)
+        below, above = [v for v in coords if v < x], [v for v in coords if v > x]
+        return set(below[-1:] + above[:1])
+
+    def _corner(self, row: int) -> bool:
+        """True if the row is a corner of the grid cell around the query being answered
+        (``self._query`` = (ν, Ca_B, λ/λc), set by :meth:`quantity`): its ν, its Ca_B and, on
+        its own line, its λ/λc bracket the query's."""
+        nu, ca, r = (self.columns[k][row] for k in ("nu", "ca_b", "lam_ratio"))
+        qnu, qc, qr = self._query
+        if nu not in self._bracket(self.nus, qnu) or ca not in self._bracket(self.cas, qc):
+            return False
+        line = [v for v in self.ratios if not self.superseded(nu, v, ca)]
+        return r in self._bracket(line, qr)
+
+    def _interior(self, row: int, axis: str) -> bool:
+        """True if the row's node is not at an end of the axis (its LOO is an interpolation)."""
+        name, ends = {"lam": ("lam_ratio", (self._ratio_of[0], self._ratio_of[-1])),
+                      "nu": ("nu", (self.nus[0], self.nus[-1])),
+                      "ca": ("ca_b", (self.cas[0], self.cas[-1]))}[axis]
+        v = self.columns[name][row]
+        return all(abs(v - e) > _ON_NODE * max(1.0, abs(e)) for e in ends)
+
     def _loo(self, row: int, q: str, axis: str):
         col = self.columns.get(f"loo_{axis}_{q}")
         return None if col is None or col[row] is None else float(col[row])
 
     # ---------------------------------------------------------------- one axis
-    def _axis(self, q, axis, coords, x, inner, exclude=None, extrapolate=False):
+    def _axis(self, q, axis, coords, x, inner, exclude=None, extrapolate=False, skip=None):
         """Interpolate along one axis: ``coords`` the node coordinates (ascending), ``inner(i)``
-        the partial result at node i (or a reason string). Returns a _Part or a reason."""
-        idx = [i for i in range(len(coords)) if i != exclude]
+        the partial result at node i (or a reason string); nodes with ``skip(i)`` true do not
+        exist on this line. Returns a _Part or a reason."""
+        idx = [i for i in range(len(coords)) if i != exclude and not (skip and skip(i))]
         for i in idx:
             if abs(coords[i] - x) <= _ON_NODE * max(1.0, abs(x)):
                 return inner(i)
@@ -347,11 +404,19 @@ class SolutionMap:
                     return parts[i]
             extra = ([below[-2]] if len(below) > 1 else []) + ([above[1]] if len(above) > 1
                                                                  else [])
-            for i in sorted(extra, key=lambda i: abs(coords[i] - x)):   # the nearest usable
+            # the third node: the nearest usable one, preferring one solved by the methods of
+            # the bracketing pair (no lubrication value in a stencil of BEM points)
+            methods = {self.columns["method"][r] for i in parts for r in parts[i].rows}
+            usable = {}
+            for i in extra:
                 p = inner(i)
                 if not isinstance(p, str):
-                    parts[i] = p
-                    break
+                    usable[i] = p
+            order = sorted(usable, key=lambda i: (not {self.columns["method"][r] for r in
+                                                     usable[i].rows} <= methods,
+                                                 abs(coords[i] - x)))
+            if order:
+                parts[order[0]] = usable[order[0]]
         else:
             parts = {}
             for i in sorted(idx, key=lambda i: abs(coords[i] - x)):
@@ -366,10 +431,16 @@ class SolutionMap:
         w = _lagrange([coords[i] for i in nodes], x)
         ps = [parts[i] for i in nodes]
         rows = frozenset().union(*(p.rows for p in ps))
-        loo = [self._loo(r, q, axis) for r in rows]
         interp = None
-        if all(p.interp is not None for p in ps) and all(e is not None for e in loo):
-            interp = sum(abs(wi) * p.interp for wi, p in zip(w, ps)) + max(loo)
+        if not extrapolate and self._query is not None:
+            # interpolation error: the largest leave-one-out error along this axis of the
+            # rows at the corners of the query's grid cell, interior nodes of the axis first
+            # (module docstring, error bar)
+            corners = [r for r in rows if self._corner(r)]
+            use = [r for r in corners if self._interior(r, axis)] or corners or rows
+            loo = [self._loo(r, q, axis) for r in use]
+            if all(p.interp is not None for p in ps) and all(e is not None for e in loo):
+                interp = sum(abs(wi) * p.interp for wi, p in zip(w, ps)) + max(loo)
         solver = model = 0.0
         for wi, p in zip(w, ps):
             solver = _add(solver, None if p.solver is None else abs(wi) * p.solver)
@@ -378,10 +449,12 @@ class SolutionMap:
         return _Part(sum(wi * p.y for wi, p in zip(w, ps)), interp, solver, model, rows, notes)
 
     # ---------------------------------------------------------------- the three axes
-    def _leaf(self, q, log, nu, ratio, ca, delta):
+    def _leaf(self, q, log, nu, ratio, ca):
+        """The node's value in the interpolated variable: scaled with the node's own δ."""
         row, reason = self.node(nu, ratio, ca)
         if row is None:
             return reason
+        delta = 1.0 - ratio
         y = _transform(q, self.value(row, q), delta, log)
         if y is None:
             return (f"{q} missing at nu={nu:.6g}, lam/lam_c={ratio:.6g}, Ca_B={ca:.6g}"
@@ -396,14 +469,14 @@ class SolutionMap:
     def _interpolate(self, q, log, nu, x, c, exclude=None):
         """Value of quantity q (transformed) at (nu, x = delta^1/2, c = log Ca_B); ``exclude``
         = (axis, node index) leaves that node out and extrapolates along that axis (LOO)."""
-        delta = x * x
         ex = dict([exclude]) if exclude else {}
 
         def along_lam(i_nu, i_ca):
+            nu_, ca_ = self.nus[i_nu], self.cas[i_ca]
             return self._axis(q, "lam", self.xs, x,
-                              lambda k: self._leaf(q, log, self.nus[i_nu], self._ratio_of[k],
-                                                   self.cas[i_ca], delta),
-                              ex.get("lam"), "lam" in ex)
+                              lambda k: self._leaf(q, log, nu_, self._ratio_of[k], ca_),
+                              ex.get("lam"), "lam" in ex,
+                              lambda k: self.superseded(nu_, self._ratio_of[k], ca_))
 
         def along_ca(i_nu):
             return self._axis(q, "ca", self._cs, c, lambda j: along_lam(i_nu, j), ex.get("ca"),
@@ -427,6 +500,7 @@ class SolutionMap:
                          "as model error")
             clamp = True
         log = self._log_usable(q)
+        self._query = (nu, math.exp(c), lam_ratio)
         part = self._interpolate(q, log, nu, x, c)
         if isinstance(part, str) and log and part == "not positive":
             log = False
@@ -476,11 +550,12 @@ class SolutionMap:
         """Columns ``loo_<axis>_<q>``: the LOO error (in the interpolated variable) of every
         row that is a node's chosen point (None for the others and where no estimate exists)."""
         out = {f"loo_{a}_{q}": [None] * self.n for a in _AXES for q in QUANTITIES}
+        self._query = None
         for i_nu, nu in enumerate(self.nus):
             for i_ca, ca in enumerate(self.cas):
                 for k, (x, ratio) in enumerate(zip(self.xs, self._ratio_of)):
                     row, _ = self.node(nu, ratio, ca)
-                    if row is None:
+                    if row is None or self.superseded(nu, ratio, ca):
                         continue
                     for q in QUANTITIES:
                         log = self._log_usable(q)

@@ -77,11 +77,13 @@ def node_rows(m, every: int = 1) -> list[dict]:
 
 
 def build_rows(m) -> list[dict]:
-    """The converged point files of the build folder that the map uses at their node."""
+    """The converged point files of the build folder that the map uses at their node (not the
+    lubrication-only nodes between BEM points, where the map interpolates the BEM)."""
     rows = []
     for p in read_points(BUILD):
         row, _ = m.node(p["nu"], p["lam_ratio"], p["ca_b"])
-        if p["success"] and row is not None and m.columns["method"][row] == p["method"]:
+        if (p["success"] and row is not None and m.columns["method"][row] == p["method"]
+                and not m.superseded(p["nu"], p["lam_ratio"], p["ca_b"])):
             rows.append(_row(p))
     return rows
 
