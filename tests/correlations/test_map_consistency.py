@@ -32,18 +32,28 @@ def _lines(points):
     return lines
 
 
+#: Where ℓ falls with λ: the low-ν vesicles at Ca_B = 15 are elongated prolate shapes at
+#: λ/λc ≤ 0.3 (ℓ/λ = 3.7–6.2, twice a parachute's) and parachutes from 0.4, so the length drops
+#: across that branch change while V/U, Δp⁺ and the film stay monotone. (ν, Ca_B, λ/λc after
+#: the drop); a map without them, or with another drop, fails here.
+ELL_BRANCH_CHANGES = {(0.6, 15.0, 0.4), (0.65, 15.0, 0.4), (0.7, 15.0, 0.4), (0.75, 15.0, 0.4)}
+
+
 @pytest.mark.parametrize("q, sign", [("V_over_U", -1), ("dp_plus_R0", 1), ("film_min", -1),
                                      ("ell", 1)])
 def test_every_line_is_monotone_in_lam(points, q, sign):
     """Trend (Chen et al. 2020 figs. vel, dpa, film, L): a larger vesicle in the same tube is
     slower relative to U, costs more pressure, leaves a thinner film and is longer. Holds for
-    every converged point of both methods, so a point on a wrong branch breaks it."""
-    checked = 0
-    for key, line in _lines(points).items():
+    every converged point of both methods, so a point on a wrong branch breaks it; the one
+    exception is the length across the prolate-parachute change of :data:`ELL_BRANCH_CHANGES`."""
+    checked, drops = 0, set()
+    for (method, nu, ca), line in _lines(points).items():
         values = [p[q] for p in line]
         for p, a, b in zip(line[1:], values, values[1:]):
-            assert sign * (b - a) > 0, (key, p["lam_ratio"], a, b)
+            if sign * (b - a) <= 0:
+                drops.add((nu, ca, p["lam_ratio"]))
             checked += 1
+    assert drops == (ELL_BRANCH_CHANGES if q == "ell" else set())
     assert checked >= 300
 
 
@@ -67,7 +77,7 @@ def test_bem_and_lubrication_approach_each_other_toward_lam_c(points):
         assert max(gap["V_over_U"]) < 5e-3 and max(gap["ell"]) < 5e-3, (nu, ca, gap)
         for q in ("dp_plus_R0", "film_min"):
             assert all(b < a for a, b in zip(gap[q], gap[q][1:])), (nu, ca, q, gap[q])
-    assert lines >= 5
+    assert lines >= 30
 
 
 @pytest.mark.parametrize("nu", [0.98, 0.95])
