@@ -180,6 +180,9 @@ SMALL_SPHERE_SPEED_K, SMALL_SPHERE_DP_K = 1.0, 2.0
 #: |Δp⁺/(4.8λ⁶) − 1| <= 2.7λ⁵ measured with our BEM for λ <= 0.5 and Ca <= 0.5 (the drop
 #: deforms at larger Ca: −18.6λ⁵ at Ca = 1, λ = 0.2).
 SMALL_DROP_CA_MAX = 0.5
+#: smallest Ca_B at which the small-sphere laws are a reference for a quasi-spherical vesicle
+#: (measured on the map's BEM points, :func:`small_object_reference`)
+SMALL_VESICLE_CA_B_MIN = 50.0
 SMALL_DROP_SPEED_K, SMALL_DROP_DP_K = 1.0, 3.0
 
 
@@ -642,7 +645,7 @@ def near_critical_reference(nu: float, lam: float, quantity: str) -> Reference |
 
 
 def small_object_reference(kind: str, lam: float, quantity: str, nu: float = 1.0,
-                           ca: float | None = None) -> Reference | str:
+                           ca: float | None = None, ca_b: float | None = None) -> Reference | str:
     r"""Small-object law of V/U or Δp⁺R0/(ηU) on the axis, with the size of the next term.
 
     * rigid sphere (``kind`` sphere): V/U = 2 − (4/3)λ² + O(λ⁵), Δp⁺a/(ηU) = 16λ⁶(1 + O(λ⁵))
@@ -653,7 +656,9 @@ def small_object_reference(kind: str, lam: float, quantity: str, nu: float = 1.0
       sphere's laws, error the sphere's plus (1 − ν) × the leading deviation ((4/3)λ²
       resp. 16λ⁶): a vesicle at rest is not a sphere. On our BEM vesicles (ν = 0.9-0.98, λ/λc
       = 0.2-0.4) the deviation beyond the sphere's next term is at most 0.2 (1 − ν) × the
-      leading term.
+      leading term at Ca_B ≥ :data:`SMALL_VESICLE_CA_B_MIN` = 50; below it the vesicle keeps
+      more of its prolate rest shape (V/U 0.9 % above the sphere's at ν = 0.95, λ/λc = 0.2,
+      Ca_B = 15, 3.6× that error), so the law is not used for a row with a smaller ``ca_b``.
     * clean drop of viscosity ratio 1 (``kind`` drop): V/U = 2 − 0.8λ², Δp⁺R0/(ηU) = 4.8λ⁶
       (Hetsroni, Haber & Wacholder 1970), error :data:`SMALL_DROP_SPEED_K` λ⁵ resp.
       :data:`SMALL_DROP_DP_K` λ⁵ × 4.8λ⁶, measured with our BEM for λ ≤ 0.5, Ca ≤
@@ -681,6 +686,9 @@ def small_object_reference(kind: str, lam: float, quantity: str, nu: float = 1.0
                          "error: next term, measured with our BEM drop")
     if kind == "vesicle" and not SMALL_VESICLE_RANGE.contains(lam=lam, nu=nu):
         return f"small-sphere law not valid for a vesicle here ({SMALL_VESICLE_RANGE.describe()})"
+    if kind == "vesicle" and ca_b is not None and ca_b < SMALL_VESICLE_CA_B_MIN:
+        return (f"small-sphere law measured for a vesicle at Ca_B >= {SMALL_VESICLE_CA_B_MIN:g} "
+                f"(ca_b={ca_b:.3g})")
     lead = 4.0 / 3.0 * lam**2 if speed else 16.0 * lam**6
     value = 2.0 - lead if speed else lead
     error = (SMALL_SPHERE_SPEED_K * lam**5 if speed else SMALL_SPHERE_DP_K * lam**5 * lead) \
@@ -1199,7 +1207,8 @@ def _reference(row: Row, quantity: str, bem: bool, solution_map) -> Reference | 
         ca_b = row.get("ca_b", DEFAULT_CA_B)
         tries = (lambda: map_reference(nu, lam, ca_b, quantity, solution_map),
                  lambda: near_critical_reference(nu, lam, quantity),
-                 lambda: small_object_reference("vesicle", lam, quantity, nu=nu))
+                 lambda: small_object_reference("vesicle", lam, quantity, nu=nu,
+                                                ca_b=row.get("ca_b")))
     reasons = []
     for attempt in tries:
         ref = attempt()

@@ -68,10 +68,12 @@ def _row(point: dict) -> dict:
 
 
 def node_rows(m, every: int = 1) -> list[dict]:
-    """The point the map uses at each of its nodes (BEM if converged, else lubrication)."""
+    """The point the map uses at each of its nodes (BEM if converged, else lubrication; not
+    the lubrication-only nodes between BEM points, where the map interpolates the BEM)."""
     c, rows = m.columns, []
     for i in range(m.n):
-        if m.node(c["nu"][i], c["lam_ratio"][i], c["ca_b"][i])[0] == i:
+        if (m.node(c["nu"][i], c["lam_ratio"][i], c["ca_b"][i])[0] == i
+                and not m.superseded(c["nu"][i], c["lam_ratio"][i], c["ca_b"][i])):
             rows.append(_row({k: c[k][i] for k in (*COLUMNS, "method", "lam_ratio")}))
     return rows[::every]
 
