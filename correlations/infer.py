@@ -30,7 +30,10 @@ Method
    contributions are added in quadrature, together with the map's own error of each output.
    ``sampling``: ``samples`` Gaussian draws of the same inputs (fixed seed), each refitted; the
    standard deviation and the 16/84 percentiles are reported, plus the map's own output error
-   in quadrature. The uncertainty of η and κ is not propagated (they enter through Ca_B, where
+   in quadrature. When several distinct fits are acceptable (χ ≤ :data:`CHI_MAX`), the data
+   do not single out one vesicle: every fit is listed, and the largest difference between the
+   best fit's value and another fit's is added in quadrature to each uncertainty. The
+   uncertainty of η and κ is not propagated (they enter through Ca_B, where
    the map changes little for Ca_B ≥ 50, Chen et al. 2020 §III.A).
 
 From (ν, λ): R0 = λd/2, volume Ω = 4/3 πR0³, area A = 4πR0² ν^(−2/3) (from ν = 6√π Ω A^(−3/2),
@@ -397,19 +400,40 @@ def _run(m, measured: dict, errors: dict, derive, samples: int, seed: int,
                 else:
                     off[k] = sign * map_err[k]
                 pair.append(newton(meas, off) if jac is not None else refit(meas, off))
-            if None in pair:
-                notes.append(f"moving {k if kind == 'meas' else ('V/U', 'ell')[k]} by 1 sigma "
-                             "leaves the map or the data's consistency; its contribution is "
-                             "left out")
+            what = k if kind == "meas" else ("V/U", "ell")[k]
+            if pair[0] is None and pair[1] is None:
+                notes.append(f"moving {what} by 1 sigma either way leaves the map or meets a "
+                             "hole of it; its contribution is left out")
                 continue
+            if None in pair:
+                # one-sided difference: the other side of the point is a hole of the map
+                notes.append(f"{what}: one-sided difference (a hole of the map on one side)")
+                pair = [pair[0] or centre, pair[1] or centre]
+                scale = 1.0
+            else:
+                scale = 0.5
             for q in keys:
                 a, b = pair[0].get(q, (None,))[0], pair[1].get(q, (None,))[0]
                 if a is not None and b is not None:
-                    var[q] += ((a - b) / 2.0)**2
+                    var[q] += (scale * (a - b))**2
         quantities = {k: InferredValue(centre[k][0], float(math.sqrt(var[k])), UNITS[k])
                       for k in keys}
+    if len(good) > 1:
+        # the data do not single out one vesicle: the largest distance from the best fit to
+        # another acceptable fit is added in quadrature to every quantity (an error bar that
+        # covers all the vesicles the data allow, not only the neighbourhood of one)
+        others = [o for o in (_outputs(m, f.nu, f.lam_ratio, ca_of, d, scales)
+                              for f in good[1:]) if o is not None]
+        for k, q in list(quantities.items()):
+            spread = max((abs(o[k][0] - q.value) for o in others
+                          if k in o and o[k][0] is not None), default=0.0)
+            quantities[k] = InferredValue(q.value, math.hypot(q.error or 0.0, spread), q.unit,
+                                          q.low, q.high)
+        method += ("; the spread to the other acceptable fits (chi <= "
+                   f"{CHI_MAX:g}) added in quadrature")
     msg = (f"consistent: nu={best.nu:.4g}, lam/lam_c={best.lam_ratio:.4g} match V/U and ell "
-           f"to chi={best.chi:.2g} combined standard deviations")
+           f"to chi={best.chi:.2g} combined standard deviations"
+           + (f" ({len(good)} distinct vesicles match: ambiguous)" if len(good) > 1 else ""))
     log.info(msg)
     return Inference(Status.CONSISTENT, msg, best, tuple(good[1:]), quantities, inputs,
                      method, tuple(assumptions), tuple(notes))
