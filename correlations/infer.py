@@ -26,7 +26,8 @@ Method
 4. **Uncertainty.** ``linear`` (default): every uncertain input — the measurements and the
    map's error on V/U and ℓ at the solution — is moved by ± its standard deviation in turn and
    (ν, λ/λc) follows by one Newton step with the map's Jacobian ∂(V/U, ℓ)/∂(ν, λ/λc) at the
-   fit (central differences: a linearisation of the inverse map); the
+   fit (central differences: a linearisation of the inverse map; a step longer than
+   :data:`NEWTON_MAX_STEP` repeats the fit in full); the
    contributions are added in quadrature, together with the map's own error of each output.
    ``sampling``: ``samples`` Gaussian draws of the same inputs (fixed seed), each refitted; the
    standard deviation and the 16/84 percentiles are reported, plus the map's own output error
@@ -74,6 +75,9 @@ DEFAULT_RELATIVE_ERROR = 0.02
 CHI_MAX = 3.0
 #: Largest number of starts of the multi-start fit (local minima of χ over the map's nodes).
 MAX_STARTS = 4
+#: Longest Newton step (in ν or λ/λc) trusted as linear; beyond it the fit is repeated in full
+#: (half the map's grid spacing of 0.05 in ν, about that of λ/λc below 0.9).
+NEWTON_MAX_STEP = 0.025
 #: Two fits are distinct when they differ by more than this in ν or in λ/λc.
 DISTINCT = 0.02
 #: Outputs of the map carried to the result (map key -> result key).
@@ -349,9 +353,13 @@ def _run(m, measured: dict, errors: dict, derive, samples: int, seed: int,
             return None
         rhs = np.array([t[0] - offset[0] - pair[0].value, t[1] - offset[1] - pair[1].value])
         step = np.linalg.solve(jac, rhs)
-        nu = float(np.clip(best.nu + step[0], m.nus[0], m.nus[-1]))
-        ratio = float(np.clip(best.lam_ratio + step[1], m.ratios[0], m.ratios[-1]))
-        return _outputs(m, nu, ratio, c, dd, sc)
+        nu, ratio = best.nu + step[0], best.lam_ratio + step[1]
+        # a step longer than NEWTON_MAX_STEP, or one leaving the map's box, is outside the
+        # linear regime (a nearly singular Jacobian): the fit is repeated in full instead
+        if (np.abs(step).max() > NEWTON_MAX_STEP or not m.nus[0] <= nu <= m.nus[-1]
+                or not m.ratios[0] <= ratio <= m.ratios[-1]):
+            return refit(meas, offset)
+        return _outputs(m, float(nu), float(ratio), c, dd, sc)
 
     keys = [k for k, (v, _) in centre.items() if v is not None]
     if samples:

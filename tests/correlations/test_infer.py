@@ -33,6 +33,7 @@ def _bem_points():
 
 
 def _recovery(points, samples=0):
+    """(cases whose true nu and lam lie within K_SIGMA of the inference, rows)."""
     rng = np.random.default_rng(1)
     hits, rows = 0, []
     for p in points:
@@ -50,7 +51,7 @@ def _recovery(points, samples=0):
 
 
 def test_recovers_nu_and_lam_of_bem_solutions_within_two_sigma():
-    points = _bem_points()[::2]
+    points = _bem_points()
     assert len(points) >= 20, len(points)
     hits, rows = _recovery(points)
     assert hits >= COVERAGE_MIN * len(points), f"{hits}/{len(points)}: {rows}"
