@@ -402,6 +402,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_bem_parser(sub)
     from .map_cli import add_map_parser; add_map_parser(sub)   # light: solvers load on use
     from .check_cli import add_check_parser; add_check_parser(sub)   # light: loads on use
+    from .infer_cli import add_infer_parser; add_infer_parser(sub)   # light: loads on use
     return p
 
 
@@ -481,6 +482,9 @@ def _run(args) -> int:
     if not converged and out.get("message"):
         print(f"{prog}: not converged: {out['message']}", file=sys.stderr)
     if out.get("command") == "check" and out.get("verdict") == "fail":
+        return EXIT_CHECK_FAILED
+    if out.get("command") == "infer" and out.get("status") == "inconsistent":
+        print(f"{prog}: {out['message']}", file=sys.stderr)
         return EXIT_CHECK_FAILED
     return EXIT_OK if converged else EXIT_NOT_CONVERGED
 

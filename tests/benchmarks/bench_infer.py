@@ -1,0 +1,52 @@
+"""Benchmark of ``vesicle-tube infer``: target <= 1 s per cell (linearised uncertainty).
+
+Cells: V/U and ℓ = L/R of the solution map itself at 20 random (ν, λ/λc) inside the map (ν
+0.6-0.98, λ/λc 0.2-0.98, Ca_B = 50), turned into V [mm/s], L [µm] for a 6 µm tube at U = 1 mm/s,
+then inferred with ``infer_cell`` (default 2 % errors, linearisation) in this process; the map
+file is read once before timing, as in one command. Also timed: one cell with ``samples=200``.
+Not a test: timings depend on the machine. Run with ``python tests/benchmarks/bench_infer.py``.
+"""
+
+from __future__ import annotations
+
+import random
+import statistics
+import time
+
+TARGET_S = 1.0
+CELLS = 20
+DIAMETER_UM, U_MM_S = 6.0, 1.0
+
+
+def cells(m, n: int = CELLS, seed: int = 1) -> list[dict]:
+    from correlations.solution_map import query_map
+    rng, out = random.Random(seed), []
+    while len(out) < n:
+        nu, ratio = rng.uniform(0.6, 0.98), rng.uniform(0.2, 0.98)
+        q = query_map(nu, ratio, 50.0, map=m)
+        if q["V_over_U"] is None or q["ell"] is None:
+            continue
+        out.append({"v_mm_s": q["V_over_U"] * U_MM_S, "length_um": q["ell"] * DIAMETER_UM / 2})
+    return out
+
+
+def main() -> None:
+    from correlations.infer import infer_cell
+    from correlations.solution_map import load_map
+    m = load_map()
+    times, consistent = [], 0
+    for c in cells(m):
+        t = time.perf_counter()
+        r = infer_cell(diameter_um=DIAMETER_UM, u_mm_s=U_MM_S, solution_map=m, **c)
+        times.append(time.perf_counter() - t)
+        consistent += r.consistent
+    print(f"infer_cell, linearised, {len(times)} cells: median {statistics.median(times):.3f} s, "
+          f"max {max(times):.3f} s per cell (target <= {TARGET_S:g} s); {consistent} consistent")
+    t = time.perf_counter()
+    infer_cell(diameter_um=DIAMETER_UM, u_mm_s=U_MM_S, samples=200, solution_map=m,
+               **cells(m, 1)[0])
+    print(f"infer_cell, 200 samples, 1 cell: {time.perf_counter() - t:.2f} s")
+
+
+if __name__ == "__main__":
+    main()

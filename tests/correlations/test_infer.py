@@ -1,0 +1,127 @@
+"""``correlations.infer``: recovery of our own BEM solutions, refusal of inconsistent data,
+input checks, and the ``vesicle-tube infer`` command.
+
+Independent reference: the converged BEM points of the map's build folder
+(correlations/data/solution_map_build/bem_*.json: ν, λ/λc, Ca_B, V/U, ℓ as the solver wrote
+them). They sit on map nodes, so their V/U and ℓ are perturbed with 1 % Gaussian noise (fixed
+seed) and given a 1 % uncertainty; the true ν and λ must lie within 2σ of the inferred ones in
+at least 90 % of the cases (for Gaussian errors 95 % would).
+"""
+
+import glob
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from correlations.infer import Status, infer_cell, infer_map
+from correlations.solution_map import DEFAULT_MAP
+from lubrication.checks import InvalidParameterError
+
+BUILD = Path(__file__).resolve().parents[2] / "correlations" / "data" / "solution_map_build"
+NOISE = 0.01            # relative 1-sigma noise put on V/U and ell
+COVERAGE_MIN = 0.90     # fraction of cases whose truth lies within K_SIGMA of the inference
+K_SIGMA = 2.0
+
+pytestmark = pytest.mark.skipif(not DEFAULT_MAP.exists(), reason="no solution map shipped")
+
+
+def _bem_points():
+    pts = [json.loads(Path(f).read_text()) for f in sorted(glob.glob(str(BUILD / "bem_*.json")))]
+    return [p for p in pts if p.get("success")]
+
+
+def _recovery(points, samples=0):
+    """(cases whose true nu and lam lie within K_SIGMA of the inference, rows)."""
+    rng = np.random.default_rng(1)
+    hits, rows = 0, []
+    for p in points:
+        vu = p["V_over_U"] * (1 + NOISE * rng.standard_normal())
+        ell = p["ell"] * (1 + NOISE * rng.standard_normal())
+        r = infer_map(vu, ell, NOISE * vu, NOISE * ell, ca_b=p["ca_b"], samples=samples)
+        ok = False
+        if r.consistent:
+            q = r.quantities
+            ok = (abs(q["nu"].value - p["nu"]) <= K_SIGMA * q["nu"].error + 1e-9
+                  and abs(q["lam"].value - p["lam"]) <= K_SIGMA * q["lam"].error + 1e-9)
+        hits += ok
+        rows.append((p["nu"], p["lam_ratio"], p["ca_b"], r.status.value, ok))
+    return hits, rows
+
+
+def test_recovers_nu_and_lam_of_bem_solutions_within_two_sigma():
+    points = _bem_points()
+    assert len(points) >= 20, len(points)
+    hits, rows = _recovery(points)
+    assert hits >= COVERAGE_MIN * len(points), f"{hits}/{len(points)}: {rows}"
+
+
+@pytest.mark.slow
+def test_recovers_every_bem_solution_with_sampling():
+    points = _bem_points()
+    hits, rows = _recovery(points, samples=50)
+    assert hits >= COVERAGE_MIN * len(points), f"{hits}/{len(points)}: {rows}"
+
+
+def test_refuses_data_no_steady_vesicle_matches():
+    r = infer_map(1.9, 20.0)
+    assert r.status is Status.INCONSISTENT
+    assert "inconsistent with any steady axisymmetric vesicle" in r.message
+    assert r.fit.chi > 3
+
+
+def test_cell_volume_and_area_follow_from_nu_and_lam():
+    """R0 = lam d/2, volume 4/3 pi R0^3, area from nu = 6 sqrt(pi) Omega A^-3/2 (exact)."""
+    r = infer_cell(length_um=8.0, diameter_um=6.0, u_mm_s=1.0, v_mm_s=1.3)
+    assert r.consistent, r.message
+    q = r.quantities
+    R0 = q["lam"].value * 3.0
+    assert q["R0_um"].value == pytest.approx(R0, rel=1e-12)
+    omega, area = q["volume_fl"].value, q["area_um2"].value
+    assert 6 * np.sqrt(np.pi) * omega * area**-1.5 == pytest.approx(q["nu"].value, rel=1e-12)
+    assert any("Ca_B = 50" in a for a in r.assumptions)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(length_um=8.0, diameter_um=-6.0, u_mm_s=1.0, v_mm_s=1.3), "diameter_um"),
+    (dict(length_um=8.0, diameter_um=6.0, u_mm_s=0.0, v_mm_s=1.3), "u_mm_s"),
+    (dict(length_um=float("nan"), diameter_um=6.0, u_mm_s=1.0, v_mm_s=1.3), "length_um"),
+    (dict(length_um=8.0, diameter_um=6.0, u_mm_s=1.0), "v_mm_s"),
+    (dict(length_um=8.0, diameter_um=6.0, u_mm_s=1.0, v_mm_s=1.3, v_err=-1.0), "v_err"),
+])
+def test_bad_input_names_the_parameter(kwargs, name):
+    with pytest.raises(InvalidParameterError) as info:
+        infer_cell(**kwargs)
+    assert info.value.name == name
+    assert name in str(info.value)
+
+
+def test_cli_exit_codes_and_json(capsys):
+    from correlations.cli import main
+    assert main(["infer", "--v-over-u", "1.9", "--length-um", "40", "--diameter-um", "4",
+                 "--u-mm-s", "1"]) == 1
+    capsys.readouterr()
+    assert main(["infer", "--v-mm-s", "1.3", "--length-um", "8", "--diameter-um", "-6",
+                 "--u-mm-s", "1"]) == 2
+    assert "--diameter-um" in capsys.readouterr().err
+    assert main(["infer", "--v-mm-s", "1.3", "--length-um", "8", "--diameter-um", "6",
+                 "--u-mm-s", "1", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["command"] == "infer" and out["status"] == "consistent"
+    assert out["quantities"]["volume_fl"]["error"] > 0
+
+
+def test_worked_example_recovers_the_cell_it_was_made_from():
+    """docs/user-guide.md section 10: V and L are the map's values for a 90 fL, nu = 0.65 cell
+    in a 4.5 um tube (rounded as a measurement); the true nu, volume and area must lie within
+    the reported 1-sigma error bars (independent reference: the cell the data were made from)."""
+    import math
+    r = infer_cell(v_mm_s=1.24, v_err=0.02, length_um=10.6, length_err=0.3, diameter_um=4.5,
+                   diameter_err=0.05, u_mm_s=1.0, u_err=0.02, eta_mpas=1.2, kappa_j=2e-19)
+    assert r.consistent, r.message
+    R0 = (90.0 * 3 / (4 * math.pi))**(1 / 3)
+    truth = {"nu": 0.65, "volume_fl": 90.0, "area_um2": 4 * math.pi * R0**2 * 0.65**(-2 / 3)}
+    for k, v in truth.items():
+        q = r.quantities[k]
+        assert abs(q.value - v) <= q.error, (k, q, v)
