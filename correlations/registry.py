@@ -196,7 +196,7 @@ def _eta_single_file(s: dict) -> float:
 # 10 % and V/U, ell within 0.5 %. Measured in the map's overlap (tests/benchmarks/
 # lubrication_overlap.py, every (nu, Ca_B) line with both methods converged): the largest
 # |lubrication - BEM|/BEM in Delta p+ is 5.7 % at delta = 0.02, 10.0 % at 0.05 and 15.2 % at 0.1
-# (lubrication low; V/U within 0.3 %, ell within 0.5 % at all three), so delta <= 0.05. (Chen
+# (lubrication low; V/U within 0.1 % and ell within 0.11 % for delta <= 0.05), so delta <= 0.05. (Chen
 # et al. 2020 §IV.C find "very good agreement" for lam > 1.4 at nu ~ 0.6, delta <~ 0.3, by eye
 # on a figure; our BEM has Delta p+ 21-27 % apart at delta = 0.29.) nu from 0.6 to 0.98 is the
 # range the solver is tested on.

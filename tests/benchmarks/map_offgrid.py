@@ -24,6 +24,7 @@ import argparse
 import json
 import math
 import random
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -140,23 +141,27 @@ def main(argv=None) -> int:
               + "  ".join(cells) + ("" if d["success"] else "  direct: not converged"),
               flush=True)
     print()
-    print(f"{'quantity':>11} {'points':>6} {'max rel err':>11} {'target':>7} {'covered':>8}")
+    print(f"{'quantity':>11} {'points':>6} {'median rel err':>14} {'max rel err':>11} "
+          f"{'target':>7} {'within':>7} {'covered':>8} {'median bar/err':>14}")
     status = 0
     for q, target in TARGETS.items():
-        errs, cover = [], []
+        errs, cover, ratios = [], [], []
         for row in rows:
             mv, d = row["map"][q], row["direct"]
             if d["success"] and mv["value"] is not None and d[q] is not None:
                 e = abs(mv["value"] - d[q])
                 errs.append(e / abs(d[q]))
                 cover.append(mv["error"] is not None and mv["error"] >= e)
+                ratios.append((mv["error"] or 0.0) / max(e, 1e-300))
         if not errs:
             print(f"{q:>11} {0:6d} {'—':>11}")
             continue
         frac = sum(cover) / len(cover)
+        within = sum(e <= target for e in errs) / len(errs)
         ok = max(errs) <= target and frac >= COVERAGE_TARGET
         status |= not ok
-        print(f"{q:>11} {len(errs):6d} {max(errs):11.2e} {target:7.0e} {frac:8.0%}"
+        print(f"{q:>11} {len(errs):6d} {statistics.median(errs):14.2e} {max(errs):11.2e} "
+              f"{target:7.0e} {within:7.0%} {frac:8.0%} {statistics.median(ratios):14.1f}"
               + ("" if ok else "  MISSED"))
     left = [r["point"] for r in rows if not r["direct"]["success"]]
     holes = [r["point"] for r in rows if r["direct"]["success"]
