@@ -447,6 +447,23 @@ def _point_names(folder) -> set[str]:
             if not p.name.startswith(".")}
 
 
+def _pool_context():
+    """Start method of the local pool: fork (cheap; workers inherit the parent's state), but
+    spawn once this process has started numba's parallel threading layer (a BEM solve in the
+    same process): forking after GNU OpenMP has started aborts the workers ("fork() called
+    from a process already using GNU OpenMP")."""
+    import multiprocessing
+    import sys
+    numba = sys.modules.get("numba")
+    if numba is not None:
+        try:
+            numba.threading_layer()        # ValueError until a parallel kernel has run
+            return multiprocessing.get_context("spawn")
+        except ValueError:
+            pass
+    return multiprocessing.get_context("fork")
+
+
 def _parallel(folder, jobs, args, workers, client, state, report) -> None:
     """Run the line jobs on a process pool or a Dask client, polling the build folder for
     progress; Ctrl-C stops the workers and propagates."""
@@ -455,7 +472,7 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
         n = min(workers or os.cpu_count() or 1, max(len(jobs), 1))
-        executor = ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork"),
+        executor = ProcessPoolExecutor(n, mp_context=_pool_context(),
                                        initializer=_ignore_sigint)
         submit = executor.submit
         parent = os.getpid()
