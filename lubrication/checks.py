@@ -272,7 +272,9 @@ def check_output(quantity: str, value, state: dict) -> str:
         return f"{quantity} = {value!r} is not a finite number"
     lo, hi, reason = OUTPUT_BOUNDS.get(quantity, (-math.inf, math.inf, ""))
     if not lo <= value <= hi:
-        return f"{quantity} = {value:.6g} outside {lo:g} <= {quantity} <= {hi:g} ({reason})"
+        bound = (f"{lo:g} <= {quantity} <= {hi:g}" if math.isfinite(lo) and math.isfinite(hi)
+                 else f"{quantity} >= {lo:g}" if math.isfinite(lo) else f"{quantity} <= {hi:g}")
+        return f"{quantity} = {value:.6g} outside {bound} ({reason})"
     h_t = value if quantity == "tube_hematocrit" else state.get("tube_hematocrit")
     h_d = value if quantity == "discharge_hematocrit" else state.get("discharge_hematocrit")
     if quantity in ("tube_hematocrit", "discharge_hematocrit") and h_t is not None \
