@@ -264,7 +264,7 @@ def check_output(quantity: str, value, state: dict) -> str:
     >>> check_output("V_over_U", 1.2, {})
     ''
     >>> check_output("dp_plus_R0", -0.3, {})[:40]
-    'dp_plus_R0 = -0.3 outside 0 <= dp_plus_R'
+    'dp_plus_R0 = -0.3 outside dp_plus_R0 >= '
     """
     if isinstance(value, str):
         return ""
