@@ -62,6 +62,7 @@ from lubrication.geometry import critical_confinement
 from .estimate import PHYSICAL_BOUNDS, physical_scales
 
 __all__ = ["Status", "InferredValue", "Fit", "Inference", "infer_map", "infer_cell",
+           "mean_velocity_from_gradient",
            "DEFAULT_CA_B", "DEFAULT_RELATIVE_ERROR", "CHI_MAX"]
 
 log = logging.getLogger(__name__)
@@ -487,6 +488,28 @@ def infer_map(V_over_U: float, ell: float, V_over_U_err: float | None = None,
                 lambda lam: float(ca_b), None, None)
 
     return _run(m, measured, errors, derive, samples, seed, [])
+
+
+def mean_velocity_from_gradient(dpdx_pa_m: float, diameter_um: float, eta_mpas: float,
+                                dpdx_err: float | None = None,
+                                diameter_err: float | None = None) -> tuple[float, float]:
+    r"""Mean velocity U [mm/s] of the undisturbed Poiseuille flow driven by the pressure
+    gradient G = −dp/dx [Pa/m] in a tube of diameter d: U = G R²/(8η), R = d/2 (Hagen–
+    Poiseuille), and its 1-σ error from those of G and d (default
+    :data:`DEFAULT_RELATIVE_ERROR` × value; η taken as exact): δU/U = ((δG/G)² + (2δd/d)²)^(1/2).
+
+    >>> round(mean_velocity_from_gradient(8.0e5, 4.0, 1.0)[0], 9)    # G R^2/(8 eta), mm/s
+    0.4
+    """
+    for name, value in (("dpdx_pa_m", dpdx_pa_m), ("diameter_um", diameter_um),
+                        ("eta_mpas", eta_mpas)):
+        check_range(name, value, 0.0, math.inf, lo_open=True, hi_open=True,
+                    reason="a positive finite number")
+    g_err = DEFAULT_RELATIVE_ERROR * dpdx_pa_m if dpdx_err is None else float(dpdx_err)
+    d_err = DEFAULT_RELATIVE_ERROR * diameter_um if diameter_err is None else float(diameter_err)
+    radius_m = 0.5 * diameter_um * 1e-6
+    u = dpdx_pa_m * radius_m**2 / (8.0 * eta_mpas * 1e-3) * 1e3
+    return u, u * math.hypot(g_err / dpdx_pa_m, 2.0 * d_err / diameter_um)
 
 
 def infer_cell(length_um: float, diameter_um: float, u_mm_s: float,

@@ -14,6 +14,7 @@ __all__ = ["add_infer_parser", "cmd_infer"]
 #: the option a user types for each parameter of :func:`correlations.infer.infer_cell`
 OPTIONS = {"v_mm_s": "--v-mm-s", "v_over_u": "--v-over-u", "length_um": "--length-um",
            "diameter_um": "--diameter-um", "u_mm_s": "--u-mm-s", "eta_mpas": "--eta-mpas",
+           "dpdx_pa_m": "--dpdx-pa-m",
            "kappa_j": "--kappa-j", "v_err": "--v-err", "length_err": "--length-err",
            "diameter_err": "--diameter-err", "u_err": "--u-err", "map": "--map"}
 
@@ -31,12 +32,21 @@ ROWS = (("nu", "reduced volume nu"), ("lam", "confinement lam = R0/R"),
 def cmd_infer(args):
     from lubrication.cli_contract import format_rows, format_value_error, options_named
 
-    from .infer import infer_cell
+    from lubrication.cli_contract import UsageError
+
+    from .infer import infer_cell, mean_velocity_from_gradient
     with options_named(OPTIONS, args):
+        u_mm_s, u_err = args.u_mm_s, args.u_err
+        if args.dpdx_pa_m is not None:
+            if args.eta_mpas is None:
+                raise UsageError("--dpdx-pa-m: needs --eta-mpas (U = G R^2/(8 eta))")
+            u_mm_s, u_err = mean_velocity_from_gradient(args.dpdx_pa_m, args.diameter_um,
+                                                        args.eta_mpas, args.dpdx_err,
+                                                        args.diameter_err)
         r = infer_cell(length_um=args.length_um, diameter_um=args.diameter_um,
-                       u_mm_s=args.u_mm_s, v_mm_s=args.v_mm_s, v_over_u=args.v_over_u,
+                       u_mm_s=u_mm_s, v_mm_s=args.v_mm_s, v_over_u=args.v_over_u,
                        length_err=args.length_err, diameter_err=args.diameter_err,
-                       u_err=args.u_err, v_err=args.v_err, eta_mpas=args.eta_mpas,
+                       u_err=u_err, v_err=args.v_err, eta_mpas=args.eta_mpas,
                        kappa_j=args.kappa_j, samples=args.samples or 0,
                        solution_map=args.map)
     out = {"command": "infer", "converged": True, **r.to_dict()}
@@ -65,8 +75,13 @@ def add_infer_parser(subparsers) -> None:
     p.add_argument("--length-um", type=finite_float, required=True,
                    help="measured full axial cell length L [um]")
     p.add_argument("--diameter-um", type=finite_float, required=True, help="tube diameter d [um]")
-    p.add_argument("--u-mm-s", type=finite_float, required=True,
-                   help="mean flow velocity U [mm/s]")
+    flow = p.add_mutually_exclusive_group(required=True)
+    flow.add_argument("--u-mm-s", type=finite_float, help="mean flow velocity U [mm/s]")
+    flow.add_argument("--dpdx-pa-m", type=finite_float, metavar="G",
+                      help="imposed pressure gradient -dp/dx of the Poiseuille flow [Pa/m] "
+                           "(needs --eta-mpas): U = G R^2/(8 eta)")
+    p.add_argument("--dpdx-err", type=finite_float,
+                   help="absolute 1-sigma uncertainty of G [Pa/m] (default 2 %% of the value)")
     p.add_argument("--eta-mpas", type=finite_float,
                    help="suspending viscosity [mPa s] (dp+ in Pa, tensions in mN/m; with "
                         "--kappa-j: Ca_B, else Ca_B = 50 is assumed)")

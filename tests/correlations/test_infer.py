@@ -10,6 +10,7 @@ at least 90 % of the cases (for Gaussian errors 95 % would).
 
 import glob
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -125,3 +126,25 @@ def test_worked_example_recovers_the_cell_it_was_made_from():
     for k, v in truth.items():
         q = r.quantities[k]
         assert abs(q.value - v) <= q.error, (k, q, v)
+
+
+def test_the_pressure_gradient_gives_the_poiseuille_mean_velocity(capsys):
+    """-dp/dx = G drives U = G R^2/(8 eta) (Hagen-Poiseuille, independent closed form): the CLI
+    with --dpdx-pa-m infers the same cell as with that U; without --eta-mpas it refuses."""
+    from correlations.cli import main
+    from correlations.infer import mean_velocity_from_gradient
+    d, eta = 6.0, 1.2
+    g = 8.0 * eta * 1e-3 * 1e-3 / (0.5 * d * 1e-6) ** 2          # U = 1 mm/s
+    u, u_err = mean_velocity_from_gradient(g, d, eta)
+    assert u == pytest.approx(1.0, rel=1e-12)
+    assert u_err == pytest.approx(u * math.hypot(0.02, 0.04), rel=1e-12)
+    base = ["infer", "--v-mm-s", "1.3", "--length-um", "8", "--diameter-um", str(d), "--json",
+            "--eta-mpas", str(eta)]
+    assert main(base + ["--u-mm-s", "1", "--u-err", repr(u_err)]) == 0
+    with_u = json.loads(capsys.readouterr().out)["quantities"]
+    assert main(base + ["--dpdx-pa-m", repr(g)]) == 0
+    with_g = json.loads(capsys.readouterr().out)["quantities"]
+    for key in ("nu", "lam", "volume_fl"):
+        assert with_g[key]["value"] == pytest.approx(with_u[key]["value"], rel=1e-9)
+    assert main(base[:-2] + ["--dpdx-pa-m", repr(g)]) == 2
+    assert "--dpdx-pa-m" in capsys.readouterr().err
