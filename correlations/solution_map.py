@@ -285,6 +285,7 @@ class SolutionMap:
                       for h in self.holes}
         self._overlap = {}
         self._query = None       # the query being answered (quantity), None while packing
+        self._superseded = {}    # memo of superseded()
         self._bem_top = {}       # (nu, Ca_B) -> largest lam_ratio with a converged BEM point
         for m, nu, r, ca in zip(self.columns["method"], self.columns["nu"],
                                 self.columns["lam_ratio"], self.columns["ca_b"]):
@@ -312,9 +313,11 @@ class SolutionMap:
         the largest λ/λc of its (ν, Ca_B) line with a converged BEM point: there the line is
         interpolated between BEM points and the node is left out (module docstring, the rule).
         A failed BEM point on the BEM grid stays a hole."""
-        if round(lam_ratio, 9) in self._on_grid.get("bem", ()):
-            return False
-        return lam_ratio < self._bem_top.get(_key(nu, ca_b), 0.0) - _ON_NODE
+        k = (nu, lam_ratio, ca_b)
+        if k not in self._superseded:
+            self._superseded[k] = (round(lam_ratio, 9) not in self._on_grid.get("bem", ()) and
+                                   lam_ratio < self._bem_top.get(_key(nu, ca_b), 0.0) - _ON_NODE)
+        return self._superseded[k]
 
     def value(self, row: int, q: str):
         v = self.columns[q][row]
@@ -362,14 +365,17 @@ class SolutionMap:
 
     def _corner(self, row: int) -> bool:
         """True if the row is a corner of the grid cell around the query being answered
-        (``self._query`` = (ν, Ca_B, λ/λc), set by :meth:`quantity`): its ν, its Ca_B and, on
-        its own line, its λ/λc bracket the query's."""
+        (``self._query`` = (the ν and Ca_B nodes around it, its λ/λc, the λ/λc nodes around it
+        per line, filled as needed), set by :meth:`quantity`): its ν, its Ca_B and, on its own
+        line, its λ/λc bracket the query's."""
         nu, ca, r = (self.columns[k][row] for k in ("nu", "ca_b", "lam_ratio"))
-        qnu, qc, qr = self._query
-        if nu not in self._bracket(self.nus, qnu) or ca not in self._bracket(self.cas, qc):
+        nus, cas, qr, lines = self._query
+        if nu not in nus or ca not in cas:
             return False
-        line = [v for v in self.ratios if not self.superseded(nu, v, ca)]
-        return r in self._bracket(line, qr)
+        if (nu, ca) not in lines:
+            lines[nu, ca] = self._bracket([v for v in self.ratios
+                                           if not self.superseded(nu, v, ca)], qr)
+        return r in lines[nu, ca]
 
     def _interior(self, row: int, axis: str) -> bool:
         """True if the row's node is not at an end of the axis (its LOO is an interpolation)."""
@@ -407,16 +413,18 @@ class SolutionMap:
             # the third node: the nearest usable one, preferring one solved by the methods of
             # the bracketing pair (no lubrication value in a stencil of BEM points)
             methods = {self.columns["method"][r] for i in parts for r in parts[i].rows}
-            usable = {}
-            for i in extra:
+            fallback = None
+            for i in sorted(extra, key=lambda i: abs(coords[i] - x)):
                 p = inner(i)
-                if not isinstance(p, str):
-                    usable[i] = p
-            order = sorted(usable, key=lambda i: (not {self.columns["method"][r] for r in
-                                                     usable[i].rows} <= methods,
-                                                 abs(coords[i] - x)))
-            if order:
-                parts[order[0]] = usable[order[0]]
+                if isinstance(p, str):
+                    continue
+                if {self.columns["method"][r] for r in p.rows} <= methods:
+                    parts[i] = p
+                    break
+                fallback = fallback or (i, p)
+            else:
+                if fallback is not None:
+                    parts[fallback[0]] = fallback[1]
         else:
             parts = {}
             for i in sorted(idx, key=lambda i: abs(coords[i] - x)):
@@ -500,7 +508,8 @@ class SolutionMap:
                          "as model error")
             clamp = True
         log = self._log_usable(q)
-        self._query = (nu, math.exp(c), lam_ratio)
+        self._query = (self._bracket(self.nus, nu), self._bracket(self.cas, math.exp(c)),
+                       lam_ratio, {})
         part = self._interpolate(q, log, nu, x, c)
         if isinstance(part, str) and log and part == "not positive":
             log = False
