@@ -21,8 +21,8 @@ which every solve starts from the previous converged point (:func:`line_tasks`):
   ``seed`` names the start that converged, its ``message`` the reasons of the others.
 
 Every finished point, converged or failed, is written at once as its own JSON file
-(:func:`correlations.solution_map.point_filename`) through :func:`lubrication.io.write_json` (atomic),
-so a killed build leaves only complete files. A restarted build skips the stored points of each
+(:func:`correlations.solution_map.point_filename`) through :func:`lubrication.io.write_json`
+(atomic), so a killed build leaves only complete files. A restarted build skips the stored points of each
 line and warm-starts from the last converged *stored* point (BEM: the spectral ``modes`` and
 ``density`` of the point, rebuilt with :meth:`bem.shape.SpectralCurve.closed` at the new volume;
 lubrication stores no solver state and cold-starts, which costs about a second).
@@ -469,7 +469,6 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
     progress; Ctrl-C stops the workers and propagates."""
     executor = None
     if client is None:
-        import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
         n = min(workers or os.cpu_count() or 1, max(len(jobs), 1))
         executor = ProcessPoolExecutor(n, mp_context=_pool_context(),

@@ -27,10 +27,10 @@ lubrication point if it converged, else the node is a hole (with both reasons). 
 thus used only where BEM has no converged point, in practice next to λc where BEM is hardest
 and lubrication becomes exact (Secomb et al. 1986; Barakat & Shaqfeh 2018b). Below the largest
 λ/λc of a (ν, Ca_B) line with a converged BEM point, a node off the BEM grid (the
-lubrication-only nodes 0.92, 0.94, … between the BEM nodes 0.9, 0.95, 0.98) is left out of that line
-(:meth:`SolutionMap.superseded`): interpolating the BEM neighbours is more accurate there than
-lubrication, whose Δp⁺ is 5–15 % low at δ = 0.02–0.1 (tests/benchmarks/lubrication_overlap.py). A
-lubrication
+lubrication-only nodes 0.92, 0.94, … between the BEM nodes 0.9, 0.95, 0.98) is left out of that
+line (:meth:`SolutionMap.superseded`): interpolating the BEM neighbours is more accurate there
+than lubrication, whose Δp⁺ is 5–15 % low at δ = 0.02–0.1
+(tests/benchmarks/lubrication_overlap.py). A lubrication
 value carries a *model error*: the difference between lubrication and BEM measured at the
 largest λ/λc of the same (ν, Ca_B) line where both converged (the default grids overlap at
 λ/λc = 0.9–0.98 for this). Lubrication approaches the full Stokes solution as δ → 0, so the
@@ -75,9 +75,10 @@ the full grid, up to eightfold where the data are smooth and more next to a node
 unscaled because the map also holds branch changes (at Ca_B ≤ 15 and λ/λc ≤ 0.3 the low-ν
 vesicles are elongated prolate shapes, parachutes above), where the LOO error is the honest
 one. Measured on a map with every other ν node, or λ/λc node, removed and queried at the removed
-nodes: the bar covers the true error at 84–100 % of them, median 4–10× it
-(docs/validation.md, solution map). Queries that used the largest LOO of all the nodes of their
-stencil (the first version) were 10–1000× the true error. ``solver_error``: the solver's own error estimate (BEM refinement
+nodes: the bar covers the true error at 86–100 % of them, median 5–11× it
+(tests/benchmarks/map_error_bars.py; docs/validation.md, solution map). Queries that used the
+largest LOO of all the nodes of their stencil (the first version) were 10–1000× the true error.
+``solver_error``: the solver's own error estimate (BEM refinement
 pair |fine − coarse| for V/U, Δp⁺ and γ_max; none otherwise) propagated with the interpolation
 weights; None when a neighbour has none. ``model_error``: see the rule above (and the Ca_B clamp
 below). ``error`` = the sum of the known parts, in the quantity's units.
