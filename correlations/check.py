@@ -1301,7 +1301,7 @@ def check_results(rows_or_path, *, bem: bool = True, solution_map=None) -> Check
     if default_ca:
         listed = ", ".join(map(str, default_ca[:10])) + (", ..." if len(default_ca) > 10 else "")
         assumptions.append(f"{len(default_ca)} vesicle rows without ca_b (rows {listed}): the "
-                           f"map was read at Ca_B = {DEFAULT_CA_B:g} (Chen et al. 2020 §III.A: "
+                           f"map was read at Ca_B = {DEFAULT_CA_B:g} (Chen et al. 2020 §IV.A: "
                            "shapes virtually independent of Ca_B >= 50); give ca_b")
     if not bem and any(r.kind != "vesicle" or r.get("nu") == 1.0 for r in rows):
         assumptions.append("BEM references skipped (bem=False): spheres and drops are checked "

@@ -142,7 +142,7 @@ def cmd_geometry(args) -> dict:
     units = {"R0_um": "um", "d_c_um": "um", "L_c_um": "um", "ell_c": "R_c", "passes": ""}
     inputs = {"nu", "lam"} if R0 is None else set()
     rows = [(LABELS.get(k, k), v, units.get(k, "-"),
-             "input" if k in inputs else "Chen et al. 2020 §III", "")
+             "input" if k in inputs else "Chen et al. 2020 §IV.A", "")
             for k, v in out.items() if k not in ("command", "converged")]
     return out, format_rows(rows, "Geometry of confinement") + "\n" + UNIT_CONVENTION
 

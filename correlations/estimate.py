@@ -319,7 +319,7 @@ def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapola
         q = quantities[name] = _select(name, known, extrapolated, extrapolate, solvers, log)
         if q.value is not None:
             (known if q.valid else extrapolated)[name] = q.value
-    geometric = {k: Quantity(state[k], UNITS[k], "geometry (Chen 2020 §III)", True)
+    geometric = {k: Quantity(state[k], UNITS[k], "geometry (Chen 2020 §IV.A)", True)
                  for k in ("lam_c", "ell_c", "delta")}
     dp = quantities["dp_plus_R0"]
     # dp+ R/(eta U) = (dp+ R0/(eta U)) / lam: a division, since 1/lam overflows for tiny lam.
@@ -604,7 +604,7 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     inputs = {"volume_fl": float(volume_fl), "area_um2": float(area_um2), "diameter_um": diameter_um,
               "velocity_mm_s": U * 1e3, "plasma_viscosity_mpas": eta * 1e3, "bending_modulus_j": kappa,
               "hematocrit": hematocrit, "hematocrit_kind": kind}
-    geo = "geometry (Chen 2020 §III)"
+    geo = "geometry (Chen 2020 §IV.A)"
     physical = {"R0_um": Quantity(R0, "um", geo, True), "d_c_um": Quantity(d_c, "um", geo, True),
                 "L_c_um": Quantity(critical_length_um(nu, R0), "um", geo, True),
                 "ca_b": Quantity(ca_b, "-", "eta U R0^2/kappa (from the inputs)", True)}

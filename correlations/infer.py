@@ -35,7 +35,7 @@ Method
    do not single out one vesicle: every fit is listed, and the largest difference between the
    best fit's value and another fit's is added in quadrature to each uncertainty. The
    uncertainty of η and κ is not propagated (they enter through Ca_B, where
-   the map changes little for Ca_B ≥ 50, Chen et al. 2020 §III.A).
+   the map changes little for Ca_B ≥ 50, Chen et al. 2020 §IV.A).
 
 From (ν, λ): R0 = λd/2, volume Ω = 4/3 πR0³, area A = 4πR0² ν^(−2/3) (from ν = 6√π Ω A^(−3/2),
 Seifert 1997, doi:10.1080/00018739700101488), and the map's film, Δp⁺ and tensions.
@@ -68,7 +68,7 @@ __all__ = ["Status", "InferredValue", "Fit", "Inference", "infer_map", "infer_ce
 log = logging.getLogger(__name__)
 
 #: Ca_B assumed when η and κ are not both given: the map's reference value; shapes are nearly
-#: independent of Ca_B ≥ 50 (Chen et al. 2020 §III.A).
+#: independent of Ca_B ≥ 50 (Chen et al. 2020 §IV.A).
 DEFAULT_CA_B = 50.0
 #: Uncertainty of a measurement when the user gives none (relative, 1 σ).
 DEFAULT_RELATIVE_ERROR = 0.02

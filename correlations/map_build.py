@@ -149,26 +149,36 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     from bem.vesicle import NEAR_CRITICAL, solve_vesicle
     from lubrication.geometry import critical_confinement
 
-    starts = [("own", None)]
-    if warm is not None:
+    def neighbour():
         lam = lam_ratio * float(critical_confinement(nu))
-        curve = SpectralCurve.closed(warm["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
-                                     density=warm["shape"]["density"])
+        return SpectralCurve.closed(warm["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
+                                    density=warm["shape"]["density"])
+
+    starts = [("own", lambda: None)]
+    if warm is not None:
         label = f"neighbour (nu={warm['nu']:g}, lam/lam_c={warm['lam_ratio']:g})"
-        starts.insert(0 if lam_ratio <= NEAR_CRITICAL else 1, (label, curve))
+        starts.insert(0 if lam_ratio <= NEAR_CRITICAL else 1, (label, neighbour))
     deadline = None if max_time is None else time.monotonic() + max_time
-    failures, bie = [], 0
-    for label, initial in starts:
+    failures, bie, res = [], 0, None
+    for label, make_initial in starts:
         left = None if deadline is None else deadline - time.monotonic()
         if left is not None and left <= 0:
             failures.append(f"{label}: not tried, max_time spent")
             break
+        try:
+            initial = make_initial()
+        except InvalidParameterError as exc:
+            # the neighbour's density does not carry over to this volume: the next start
+            failures.append(f"{label}: cannot start ({exc})")
+            continue
         res = solve_vesicle(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial, max_time=left,
                             **options)
         bie += res.bie_solves
         if res.success:
             break
         failures.append(f"{label}: {res.message}")
+    if res is None:                  # no start could run: a failed point (stored by _point)
+        raise RuntimeError("; ".join(failures))
     seed = res.seed if initial is None else label
     message = res.message if res.success else "; ".join(failures)
     d = res.to_dict(shape=False)

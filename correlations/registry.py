@@ -32,7 +32,7 @@ below apply as without a map. The map's own range rules hold: below its smallest
 refuses; above its largest Ca_B (when that is >= 50) and up to
 :data:`~correlations.solution_map.CA_B_CLAMP_MAX` = 1e4 it returns the values at its largest
 Ca_B, with the measured change between its two largest Ca_B added as model error (Chen et al.
-2020 §III.A: shapes virtually independent of Ca_B >= 50); beyond 1e4 it refuses. The reported
+2020 §IV.A: shapes virtually independent of Ca_B >= 50); beyond 1e4 it refuses. The reported
 method is "map (BEM, interpolated)", "map (lubrication, interpolated)" or "map (BEM +
 lubrication, interpolated)" after the methods of the nodes used, and the error bar is the
 map's: interpolation + solver + model error, the parts that are known (module docstring of

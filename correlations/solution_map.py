@@ -45,21 +45,28 @@ powers of δ. The map therefore interpolates, along λ, in the coordinate x = δ
 interpolates the *scaled* quantities that stay finite and smooth as δ → 0 (:data:`TRANSFORMS`):
 
 * (V/U − 1)/δ → 1 (V/U = 1 + δ + O(δ^(3/2)), Barakat & Shaqfeh 2018a; Chen et al. 2020
-  eq:asmyp1);
-* δ·Δp⁺R0/(ηU) → 4λ(X − 1), X = λc²ν^(−2/3) (Chen et al. 2020 eq:asmyp2);
+  eq:vel2), which also tends to 1 as λ → 0 (V/U → 2, Chen et al. 2020 eq:small1);
+* δ·Δp⁺R0/(ηU)·(λ/λc)^(−6): δΔp⁺ → 4λ(X − 1), X = λc²ν^(−2/3) (Chen et al. 2020 eq:asmyp2),
+  and Δp⁺R0/(ηU) ∝ λ⁶ as λ → 0 (small sphere, Chen et al. 2020 eq:small2), so the factor
+  (λ/λc)^(−6) takes the small-λ power out (Δp⁺ changes tenfold between λ/λc = 0.2 and 0.3);
 * film/δ (uniform film h/R = Q ≈ δ; Chen et al. 2020 eq. sfilm2);
-* ℓ (ℓ ≈ ℓc λ/λc, Chen et al. 2020 eq:sL);
+* ℓ/(λ/λc) (ℓ ≈ ℓc λ/λc near λc, Chen et al. 2020 eq:sL; ℓ → 2λ for a small sphere);
 * δ^(3/2)·γ for γ_max and γ_front (Bretherton-type film h/R = 2.123 Ca_v^(2/3) with Ca_v =
-  ηV/γ_F, Secomb et al. 1986, Chen et al. 2020 eq. film_Ca, and h ≈ δ give γ ∝ δ^(−3/2));
+  ηV/γ_F, Secomb et al. 1986, Chen et al. 2020 eq. sfilm4, and h ≈ δ give γ ∝ δ^(−3/2));
 * δ·τ_w,max (gap shear ≈ V/h with h ≈ δ);
 * the rear-pole curvature as it is (it changes sign at the bullet–parachute transition).
 
 Positive scaled quantities are interpolated in their logarithm (relative accuracy over decades),
 the curvature (or any quantity whose neighbours are not all positive) linearly. Across ν the
 coordinate is ν, across Ca_B it is log Ca_B. Each axis uses local Lagrange interpolation of
-degree 2 (three nearest usable nodes, two when only two exist), tensor-product fashion
-(λ first, then Ca_B, then ν); a query on a grid node on some axis takes that node's values on
-that axis exactly.
+degree 2, tensor-product fashion (λ first, then Ca_B, then ν): the two nodes that bracket the
+query and the nearest third node whose points share the method and the shape class of the
+bracketing pair's; without such a node the interpolation on that axis is linear. A quadratic
+through a bullet–parachute branch change (at small λ/λc the low-ν vesicles are elongated
+bullets at Ca_B = 15 and parachutes at Ca_B = 50) or through a BEM–lubrication change of method
+is worse than a line (measured on the off-grid points of tests/benchmarks/map_offgrid.py: with
+the third node taken across such changes V/U was off by up to 1.75 % and Δp⁺ by 30 %). A query
+on a grid node on some axis takes that node's values on that axis exactly.
 
 Error bar
 ---------
@@ -89,7 +96,7 @@ A quantity is None with its reason, never extrapolated, when the query lies outs
 range, below its smallest or above its largest λ/λc, below its smallest Ca_B, or next to a hole
 (a bracketing node on some axis is a hole). Above the largest Ca_B of the map (500 by default)
 and up to :data:`CA_B_CLAMP_MAX` = 1e4 the values at the largest Ca_B are returned when that is
-at least 50: Chen et al. (2020) §III.A (fig. shapes1) find the steady shape "virtually independent
+at least 50: Chen et al. (2020) §IV.A (fig. shapes1) find the steady shape "virtually independent
 of Ca_B" for Ca_B ≥ 50 and their phase diagram spans 10 < Ca_B < 1e4. The clamp is not trusted
 blindly: its model error is the measured change of the (scaled) quantity between the two
 largest Ca_B of the map (e.g. 50 and 500), added to the error bar. Beyond 1e4 the query is refused.
@@ -132,12 +139,13 @@ QUANTITIES = {
     "curvature_rear": "rear-pole curvature times R, negative where convex [-]",
 }
 
-#: Interpolated variable of each quantity q (module docstring): y = (q - offset) * delta**power,
-#: in its logarithm when ``log`` and every neighbour is positive.
+#: Interpolated variable of each quantity q (module docstring):
+#: y = (q - offset) * delta**power * (lam/lam_c)**(-ratio_power), in its logarithm when ``log``
+#: and every neighbour is positive.
 TRANSFORMS = {
     "V_over_U": {"offset": 1.0, "power": -1.0, "log": True},
-    "dp_plus_R0": {"offset": 0.0, "power": 1.0, "log": True},
-    "ell": {"offset": 0.0, "power": 0.0, "log": True},
+    "dp_plus_R0": {"offset": 0.0, "power": 1.0, "ratio_power": 6.0, "log": True},
+    "ell": {"offset": 0.0, "power": 0.0, "ratio_power": 1.0, "log": True},
     "film_min": {"offset": 0.0, "power": -1.0, "log": True},
     "tension_max": {"offset": 0.0, "power": 1.5, "log": True},
     "tension_front": {"offset": 0.0, "power": 1.5, "log": True},
@@ -158,6 +166,12 @@ _BASE_COLUMNS = {
     "bie_solves": "boundary-integral solves of the point (BEM; None for lubrication)",
     "seconds": "wall-clock time of the point [s]",
 }
+#: Leave-one-out doubles the local node spacing; interpolation of degree p has an error
+#: ∝ h^(p+1), so a node's LOO error is 2^(p+1) times the full grid's: 4 for linear, 8 for
+#: quadratic stencils. The error bar divides by the smaller, 4 (module docstring, error bar).
+LOO_RATIO = 2.0
+_DIGITS = {"residual": 3, "seconds": 3}   # significant digits of a packed column (default 10)
+_PACK_RTOL = 5e-10                          # relative rounding of a 10-digit packed value
 _AXES = ("lam", "nu", "ca")      # order of interpolation: lam (x = delta^1/2), ca (log), nu
 _ON_NODE = 1e-12                 # a coordinate this close (relative) to a node is that node
 
@@ -212,21 +226,25 @@ def _key(*values) -> tuple:
     return tuple(round(float(v), 9) for v in values)
 
 
-def _transform(q: str, value, delta: float, log: bool):
-    """Interpolated variable of quantity ``q`` (None if the value is missing or, with ``log``,
-    not positive after scaling)."""
+def _scale(q: str, ratio: float) -> float:
+    """The factor δ^power (λ/λc)^(−ratio_power) of quantity ``q``'s interpolated variable."""
+    t = TRANSFORMS[q]
+    return (1.0 - ratio) ** t["power"] * ratio ** -t.get("ratio_power", 0.0)
+
+
+def _transform(q: str, value, ratio: float, log: bool):
+    """Interpolated variable of quantity ``q`` at λ/λc = ``ratio`` (None if the value is
+    missing or, with ``log``, not positive after scaling)."""
     if value is None:
         return None
-    t = TRANSFORMS[q]
-    y = (value - t["offset"]) * delta ** t["power"]
+    y = (value - TRANSFORMS[q]["offset"]) * _scale(q, ratio)
     if log:
         return math.log(y) if y > 0 else None
     return y
 
 
-def _inverse(q: str, y: float, delta: float, log: bool) -> float:
-    t = TRANSFORMS[q]
-    return (math.exp(y) if log else y) / delta ** t["power"] + t["offset"]
+def _inverse(q: str, y: float, ratio: float, log: bool) -> float:
+    return (math.exp(y) if log else y) / _scale(q, ratio) + TRANSFORMS[q]["offset"]
 
 
 def _lagrange(xs, x) -> list[float]:
@@ -338,23 +356,27 @@ class SolutionMap:
                 rl = self._row.get(_key(nu, r, ca) + ("lubrication",))
                 if rb is None or rl is None:
                     continue
-                d = 1.0 - r
-                yb, yl = (_transform(q, self.value(i, q), d, log) for i in (rb, rl))
+                yb, yl = (_transform(q, self.value(i, q), r, log) for i in (rb, rl))
                 if yb is not None and yl is not None:
                     self._overlap[k] = abs(yl - yb)
                     break
         return self._overlap[k]
 
-    def _solver_error(self, row: int, q: str, log: bool, delta: float):
+    def _solver_error(self, row: int, q: str, log: bool, ratio: float):
         err = self.columns.get(f"err_{q}", [None] * self.n)[row]
         v = self.value(row, q)
         if err is None or v is None:
             return None
         t = TRANSFORMS[q]
+        err = float(err) + _PACK_RTOL * abs(v)         # with the packed value's rounding
         if log:
             base = abs(v - t["offset"])
-            return float(err) / base if base > 0 else None
-        return float(err) * delta ** t["power"]
+            return err / base if base > 0 else None
+        return err * _scale(q, ratio)
+
+    def _kind(self, row: int) -> tuple:
+        """What a stencil's rows must share: the method and the shape class."""
+        return self.columns["method"][row], self.columns["shape_class"][row]
 
     def _bracket(self, coords, x) -> set:
         """The node coordinates around x (the node itself when x is on one)."""
@@ -411,21 +433,15 @@ class SolutionMap:
                     return parts[i]
             extra = ([below[-2]] if len(below) > 1 else []) + ([above[1]] if len(above) > 1
                                                                  else [])
-            # the third node: the nearest usable one, preferring one solved by the methods of
-            # the bracketing pair (no lubrication value in a stencil of BEM points)
-            methods = {self.columns["method"][r] for i in parts for r in parts[i].rows}
-            fallback = None
+            # the third node: the nearest usable one whose rows share the method and shape
+            # class of the bracketing pair's; without one the interpolation is linear (a
+            # quadratic through a branch change or a method change is worse than a line)
+            kinds = {self._kind(r) for i in parts for r in parts[i].rows}
             for i in sorted(extra, key=lambda i: abs(coords[i] - x)):
                 p = inner(i)
-                if isinstance(p, str):
-                    continue
-                if {self.columns["method"][r] for r in p.rows} <= methods:
+                if not isinstance(p, str) and {self._kind(r) for r in p.rows} <= kinds:
                     parts[i] = p
                     break
-                fallback = fallback or (i, p)
-            else:
-                if fallback is not None:
-                    parts[fallback[0]] = fallback[1]
         else:
             parts = {}
             for i in sorted(idx, key=lambda i: abs(coords[i] - x)):
@@ -449,7 +465,7 @@ class SolutionMap:
             use = [r for r in corners if self._interior(r, axis)] or corners or rows
             loo = [self._loo(r, q, axis) for r in use]
             if all(p.interp is not None for p in ps) and all(e is not None for e in loo):
-                interp = sum(abs(wi) * p.interp for wi, p in zip(w, ps)) + max(loo)
+                interp = sum(abs(wi) * p.interp for wi, p in zip(w, ps)) + max(loo) / LOO_RATIO
         solver = model = 0.0
         for wi, p in zip(w, ps):
             solver = _add(solver, None if p.solver is None else abs(wi) * p.solver)
@@ -463,8 +479,7 @@ class SolutionMap:
         row, reason = self.node(nu, ratio, ca)
         if row is None:
             return reason
-        delta = 1.0 - ratio
-        y = _transform(q, self.value(row, q), delta, log)
+        y = _transform(q, self.value(row, q), ratio, log)
         if y is None:
             return (f"{q} missing at nu={nu:.6g}, lam/lam_c={ratio:.6g}, Ca_B={ca:.6g}"
                     if self.value(row, q) is None else "not positive")
@@ -472,7 +487,7 @@ class SolutionMap:
         notes = () if model is not None else (
             f"lubrication at nu={nu:.6g}, Ca_B={ca:.6g} is not checked against BEM (no common "
             "point on this line): model error unknown",)
-        return _Part(y, 0.0, self._solver_error(row, q, log, delta), model,
+        return _Part(y, 0.0, self._solver_error(row, q, log, ratio), model,
                      frozenset([row]), notes)
 
     def _interpolate(self, q, log, nu, x, c, exclude=None):
@@ -525,7 +540,7 @@ class SolutionMap:
                 notes.append(f"clamp error unknown ({other})")
             else:
                 part.model = _add(part.model, abs(part.y - other.y))
-        value = _inverse(q, part.y, delta, log)
+        value = _inverse(q, part.y, lam_ratio, log)
         t = TRANSFORMS[q]
 
         def to_value(e):
@@ -533,7 +548,7 @@ class SolutionMap:
                 return None
             if log:
                 return abs(value - t["offset"]) * math.expm1(e)
-            return e / delta ** t["power"]
+            return e / _scale(q, lam_ratio)
 
         methods = tuple(sorted({self.columns["method"][r] for r in part.rows}))
         known = [to_value(e) for e in (part.interp, part.solver, part.model) if e is not None]
@@ -569,10 +584,10 @@ class SolutionMap:
                         continue
                     for q in QUANTITIES:
                         log = self._log_usable(q)
-                        y0 = _transform(q, self.value(row, q), x * x, log)
+                        y0 = _transform(q, self.value(row, q), ratio, log)
                         if y0 is None:
                             log = False
-                            y0 = _transform(q, self.value(row, q), x * x, log)
+                            y0 = _transform(q, self.value(row, q), ratio, log)
                         if y0 is None:
                             continue
                         for axis, index in (("lam", k), ("nu", i_nu), ("ca", i_ca)):
@@ -634,6 +649,10 @@ def _check_packed(data, path) -> None:
     grid, cols = data.get("grid"), data.get("columns")
     if not isinstance(grid, dict) or not isinstance(cols, dict):
         raise _bad_file(path, "no grid or columns")
+    if data.get("transforms") != TRANSFORMS:
+        # its leave-one-out errors are in other interpolation variables than this version's
+        raise _bad_file(path, "packed with other interpolation variables than this version "
+                              "uses: pack it again with 'vesicle-tube map pack'")
     try:
         methods = list(grid["methods"])
         if not set(methods) <= {"bem", "lubrication"} or not methods:
@@ -698,7 +717,7 @@ def query_map(nu: float, lam_ratio: float, ca_b: float, map=None) -> MapQuery:
     value or above :data:`CA_B_CLAMP_MAX`) and next to holes a quantity is None with the reason;
     nothing is extrapolated. Between the largest Ca_B of the map (≥ 50) and 1e4 the values at
     the largest Ca_B are returned with the measured Ca_B change as model error (Chen et al. 2020
-    §III.A: shapes virtually independent of Ca_B ≥ 50).
+    §IV.A: shapes virtually independent of Ca_B ≥ 50).
 
     Parameters
     ----------
@@ -796,7 +815,12 @@ def pack_map(folder, out=None) -> Path:
                         continue
                     est = p.get("error_estimate") or {}
                     for c in names:
-                        cols[c].append(est.get(c[4:]) if c.startswith("err_") else p.get(c))
+                        v = est.get(c[4:]) if c.startswith("err_") else p.get(c)
+                        if isinstance(v, float) and math.isfinite(v):
+                            # the solvers' accuracy is 1e-9 relative at best; errors, residuals
+                            # and times need no more than 3 digits (a smaller file)
+                            v = float(f"{v:.{_DIGITS.get(c, 3 if c.startswith('err_') else 10)}g}")
+                        cols[c].append(v)
     units = {**_BASE_COLUMNS, **QUANTITIES,
              **{e: f"solver error estimate of {e[4:]} (same units)" for e in errors}}
     data = {"format": FORMAT, "version": FORMAT_VERSION, "grid": grid,

@@ -35,8 +35,8 @@ INPUT_ROWS = (
     ("nu", "reduced volume nu", "-", "input"),
     ("lam", "confinement lam = R0/R", "-", "input"),
     ("lam_ratio", "lam/lam_c", "-", "input"),
-    ("lam_c", "critical confinement lam_c", "-", "geometry (Chen et al. 2020 §III)"),
-    ("delta", "clearance delta = 1 - lam/lam_c", "-", "geometry (Chen et al. 2020 §III)"),
+    ("lam_c", "critical confinement lam_c", "-", "geometry (Chen et al. 2020 §IV.A)"),
+    ("delta", "clearance delta = 1 - lam/lam_c", "-", "geometry (Chen et al. 2020 §IV.A)"),
     ("ca_b", "bending capillary number Ca_B = eta U R0^2/kappa", "-", "input"),
     ("model", "model", "", "input"),
 )

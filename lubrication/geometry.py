@@ -354,7 +354,7 @@ def confinement_from_diameter(R0_um, diameter_um):
 
 
 def critical_diameter_um(nu, R0_um):
-    r"""Critical tube diameter :math:`d_c = 2R_0/\lambda_c(\nu)` [µm] (Chen et al. 2020 §III).
+    r"""Critical tube diameter :math:`d_c = 2R_0/\lambda_c(\nu)` [µm] (Chen et al. 2020 §IV.A).
 
     The smallest tube a vesicle passes intact.
 

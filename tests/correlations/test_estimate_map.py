@@ -56,7 +56,8 @@ def count_queries(monkeypatch):
 @pytest.mark.parametrize("nu, ratio, ca_b, methods", [
     (0.75, 0.7, 100.0, ("bem",)),                   # between nodes on every axis
     (0.7, 0.8, 50.0, ("bem",)),                     # on a node
-    (0.72, 0.97, 60.0, ("bem", "lubrication")),     # near lam_c: lubrication and BEM nodes
+    (0.72, 0.93, 60.0, ("bem", "lubrication")),     # between a BEM and a lubrication node
+    (0.72, 0.97, 60.0, ("lubrication",)),           # between lubrication nodes near lam_c
     (0.8, 0.99, 50.0, ("lubrication",)),            # a lubrication node
 ])
 def test_the_map_rows_return_the_query_values_and_errors(analytic_map, count_queries, nu, ratio,

@@ -71,6 +71,17 @@ def test_corrupt_or_foreign_map_file_exits_2_naming_map(cli_usage_error, tmp_pat
     assert "--map" in line and str(bad) in line
 
 
+def test_a_map_packed_with_other_interpolation_variables_is_refused(cli_usage_error, packed,
+                                                                     tmp_path):
+    data = json.loads(Path(packed).read_text())
+    data["transforms"]["ell"]["power"] = 0.5         # its LOO errors would be in another variable
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(data))
+    line = cli_usage_error("map", "query", "--nu", "0.7", "--lam-ratio", "0.5", "--ca-b", "50",
+                           "--map", str(old))
+    assert str(old) in line and "pack it again" in line
+
+
 def test_no_shipped_map_is_reported_cleanly(cli_usage_error, monkeypatch, tmp_path):
     from correlations import solution_map
     monkeypatch.setattr(solution_map, "DEFAULT_MAP", tmp_path / "absent.json")
@@ -127,7 +138,7 @@ log = sys.argv[1]
 def stand_in(nu, lam_ratio, ca_b, warm, options, max_time):
     with open(log, "a") as f:
         f.write(f"{nu} {lam_ratio}\\n")
-    time.sleep(0.4)
+    time.sleep(1.0)        # long enough that the signal lands mid-build on a loaded machine
     return ({"success": True, "message": "ok", **{q: 1.0 + lam_ratio for q in QUANTITIES},
              "shape_class": "bullet", "error_estimate": {}, "residual": 0.0, "bie_solves": 0,
              "shape": None}, None)

@@ -65,7 +65,7 @@ def test_sphere_limits():
 
 
 def test_chen_2020_statements():
-    """Chen et al. 2020 §III: nu = 0.6, 90 um^3 -> lam_c ~ 1.98, ell_c ~ 11, d_c ~ 2.8 um, L_c ~ 15.4 um."""
+    """Chen et al. 2020 §IV.A: nu = 0.6, 90 um^3 -> lam_c ~ 1.98, ell_c ~ 11, d_c ~ 2.8 um, L_c ~ 15.4 um."""
     R0 = g.volume_radius(90.0)
     assert R0 == pytest.approx(2.78, abs=0.005)           # "R0 ~ 2.8 um"
     assert g.critical_confinement(0.6) == pytest.approx(1.98, abs=0.005)
