@@ -470,12 +470,11 @@ def figure_phase(ctx):
 # --------------------------------------------------------------------------- figs. vel, dpa
 
 def _node_markers(ax, nodes, key, colors):
+    """The map's nodes at Ca_B = 50: BEM filled, lubrication open, in the colour of their ν."""
     for nu, color in colors.items():
-        pts = [(p["lam"], p[key]) for p in nodes if abs(p["nu"] - nu) < 1e-9
-               and p[key] is not None]
         for method, face in (("bem", color), ("lubrication", "none")):
-            sel = [(lam, v) for (lam, v), p in zip(pts, [p for p in nodes
-                   if abs(p["nu"] - nu) < 1e-9 and p[key] is not None]) if p["method"] == method]
+            sel = [(p["lam"], p[key]) for p in nodes if abs(p["nu"] - nu) < 1e-9
+                   and p["method"] == method and p[key] is not None]
             if sel:
                 ax.scatter(*zip(*sel), s=12, facecolor=face, edgecolor=color, lw=0.8, zorder=3)
 
@@ -494,7 +493,6 @@ def _curves_plot(ctx, key, plot_laws, ylabel):
         lam = [lm for lm, v in zip(c["lam"], c[key]) if v is not None]
         val = [v for v in c[key] if v is not None]
         ax.plot(lam, val, "-", color=colors[nu], lw=2.0, alpha=0.6, label=f"map, ν = {nu:g}")
-    lub = [p for p in nodes if p["method"] == "lubrication"]
     for nu in NUS:
         pts = sorted((p["lam"], p[key]) for p in _stored(ctx, method="lubrication")
                      if abs(p["nu"] - nu) < 1e-9)
@@ -506,7 +504,6 @@ def _curves_plot(ctx, key, plot_laws, ylabel):
     ax.legend(fontsize="x-small", ncol=2)
     ax.set_title("Ca_B = 50: map (thick), BEM nodes (filled), lubrication (open, dotted: "
                  "stored lubrication points)", fontsize="x-small")
-    del lub
     return fig, ax, curves, nodes, cached
 
 

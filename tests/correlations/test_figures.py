@@ -83,3 +83,28 @@ def test_phase_rows_match_independent_closed_forms(tmp_path):
     assert float(row.ours) == pytest.approx(ell_c * (2.0 * 2.8 / lam_c) / 2.0, rel=5e-4)
     line = next(r for r in rows if "takes place at λ_T" in r.statement)
     assert "1.814" in line.note                                 # (1.126 - 0.6)/0.29
+
+
+def test_ctrl_c_during_a_solve_exits_130_and_keeps_only_complete_files(tmp_path):
+    """Interrupted while the Ca_B series solves (BEM), the command stops with 130 and one line
+    naming the files already written; no temporary file is left."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    out = tmp_path / "figs"
+    proc = subprocess.Popen([sys.executable, "-m", "correlations.cli", "figures", "--out",
+                             str(out), "--only", "phase", "shapes_cab"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.monotonic()
+    while not (out / "phase.png").exists() and time.monotonic() - t0 < 60:
+        time.sleep(0.1)
+    time.sleep(1.0)                                  # inside the first BEM solve
+    assert proc.poll() is None
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    last = err.strip().splitlines()[-1]
+    assert "interrupted" in last and str(out / "phase.png") in last
+    assert not [p for p in out.rglob("*") if p.name.startswith(".")]
