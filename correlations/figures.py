@@ -174,10 +174,10 @@ def _ratios() -> list[float]:
     return [round(float(1 - v * v), 8) for v in x]
 
 
-def _map_curves(ctx) -> dict:
-    data, _ = ctx.cached("map_curves", {"nus": NUS, "ratios": _ratios(), "ca_b": CA_B},
-                         lambda: _query_curves(ctx, NUS, _ratios()))
-    return data
+def _map_curves(ctx) -> tuple[dict, bool]:
+    """The map curves of every ν of :data:`NUS` (cached) and whether they came from the cache."""
+    return ctx.cached("map_curves", {"nus": NUS, "ratios": _ratios(), "ca_b": CA_B},
+                      lambda: _query_curves(ctx, NUS, _ratios()))
 
 
 def _stored(ctx, *, method=None, ca_b=CA_B, success=True) -> list[dict]:
@@ -480,8 +480,9 @@ def _node_markers(ax, nodes, key, colors):
 
 
 def _curves_plot(ctx, key, plot_laws, ylabel):
-    curves = _map_curves(ctx)
-    nodes, cached = ctx.cached("nodes", {"ca_b": CA_B}, lambda: _used_nodes(ctx))
+    curves, c1 = _map_curves(ctx)
+    nodes, c2 = ctx.cached("nodes", {"ca_b": CA_B}, lambda: _used_nodes(ctx))
+    cached = c1 and c2
     fig, (ax,) = _new_figure(1, 1, (7.0, 5.0))
     with _quiet():
         plot_laws(nu=NUS, ax=ax)
@@ -597,7 +598,7 @@ def figure_pressure(ctx):
 def figure_length_film(ctx):
     """Figs. length and film of Chen et al. (2020): ℓ/ℓc and the smallest gap h/R against
     λ/λc (map, Ca_B = 50) with eq:sL (ℓ = ℓc λ/λc) and eq:sfilm2 (δ = 1 − λ/λc)."""
-    curves = _map_curves(ctx)
+    curves, cached = _map_curves(ctx)
     fig, (a1, a2) = _new_figure(2, 1, (11.0, 4.4))
     rows = []
     err_mid = {}
@@ -647,7 +648,7 @@ def figure_length_film(ctx):
                           "± 0.1", _verdict(abs(worst[2] - 1.0) <= 0.1),
                           "our film is the smallest gap; the paper's δ is taken at the "
                           "vesicle's midplane"))
-    return fig, rows, False
+    return fig, rows, cached
 
 
 def _film_points(ctx) -> list[dict]:
@@ -718,8 +719,9 @@ def figure_dp_scalings(ctx):
     (eq:dpa_v_fit)."""
     from .pressure import (dp_plus_film_chen2020, dp_plus_small_sphere_coupling,
                            dp_plus_speed_fit_chen2020)
-    curves = _map_curves(ctx)
-    nodes, cached = ctx.cached("nodes", {"ca_b": CA_B}, lambda: _used_nodes(ctx))
+    curves, c1 = _map_curves(ctx)
+    nodes, c2 = ctx.cached("nodes", {"ca_b": CA_B}, lambda: _used_nodes(ctx))
+    cached = c1 and c2
     fig, (a1, a2) = _new_figure(2, 1, (11.0, 4.6))
     near = [p for p in nodes if 0.9 <= p["lam_ratio"] < 1.0]
     alpha = np.array([p["lam"] * p["ell"] / (1.0 - p["lam_ratio"]) for p in near])
