@@ -403,6 +403,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .map_cli import add_map_parser; add_map_parser(sub)   # light: solvers load on use
     from .check_cli import add_check_parser; add_check_parser(sub)   # light: loads on use
     from .infer_cli import add_infer_parser; add_infer_parser(sub)   # light: loads on use
+    from .figures_cli import add_figures_parser; add_figures_parser(sub)   # light: loads on use
     return p
 
 

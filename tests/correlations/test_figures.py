@@ -1,0 +1,110 @@
+"""``vesicle-tube figures``: the input contract, one cheap figure end to end with its cache, and
+a comparison row against an independent value (fast: the figures used read the shipped map)."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+from cli_helpers import strict_json
+
+
+@pytest.mark.parametrize("argv, option", [
+    (("--format", "jpg"), "--format"),
+    (("--only", "nope"), "--only"),
+    (("--only",), "--only"),
+    (("--bem-max-time", "0"), "--bem-max-time"),
+])
+def test_bad_options_exit_2_naming_the_option(cli_usage_error, tmp_path, argv, option):
+    line = cli_usage_error("figures", "--out", str(tmp_path / "f"), *argv)
+    assert option in line
+    assert not (tmp_path / "f").exists()            # checked before any work
+
+
+def test_unwritable_out_exits_2_before_any_work(cli_usage_error, tmp_path):
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    assert "--out" in cli_usage_error("figures", "--out", str(afile), "--only", "viscosity")
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        if not os.access(locked, os.W_OK):          # root writes anywhere: skip that half
+            line = cli_usage_error("figures", "--out", str(locked / "sub"), "--only", "viscosity")
+            assert "--out" in line
+    finally:
+        locked.chmod(0o700)
+    assert not (locked / "sub").exists()
+
+
+def test_one_figure_end_to_end_and_the_rerun_uses_the_cache(cli, tmp_path):
+    out = tmp_path / "figs"
+    code, stdout, err = cli("figures", "--out", str(out), "--only", "viscosity", "--format",
+                            "svg", "--json")
+    assert code == 0, err
+    result = strict_json(stdout)
+    assert (out / "viscosity.svg").stat().st_size > 0
+    assert {"figures.json", "figures.md"} <= {p.name for p in out.iterdir()}
+    cache = list((out / "cache").glob("viscosity-*.json"))
+    assert len(cache) == 1
+    assert result["figures"] == [{"name": "viscosity", "caption": result["figures"][0]["caption"],
+                                  "file": str(out / "viscosity.svg"), "cached": False}]
+    rows = result["statements"]
+    assert rows and {"statement", "paper", "ours", "tolerance", "verdict", "note"} <= set(rows[0])
+    assert {r["verdict"] for r in rows} <= {"agree", "disagree", "not checked"}
+    assert json.loads((out / "figures.json").read_text())["statements"] == rows
+    md = (out / "figures.md").read_text()
+    assert "| statement | paper | ours | tolerance | verdict | note |" in md
+    assert "figures: [1/1] viscosity" in err                  # progress on stderr
+
+    mtime = cache[0].stat().st_mtime_ns
+    code, stdout, err = cli("figures", "--out", str(out), "--only", "viscosity", "--json")
+    assert code == 0, err
+    again = strict_json(stdout)
+    assert again["figures"][0]["cached"] is True and "(cache)" in err
+    assert cache[0].stat().st_mtime_ns == mtime                # read, not rewritten
+    assert again["statements"] == rows                         # same numbers from the cache
+    assert (out / "viscosity.png").is_file()
+
+
+def test_phase_rows_match_independent_closed_forms(tmp_path):
+    """The λc(0.6) row against the largest real root of 2λ³ − 3ν^(−2/3)λ² + 1 = 0 (numpy's
+    companion-matrix roots, not our solver), and the L_c row against ℓc d_c/2 from it."""
+    from correlations.figures import FigureContext, figure_phase
+    _, rows, _ = figure_phase(FigureContext(tmp_path))
+    roots = np.roots([2.0, -3.0 * 0.6 ** (-2.0 / 3.0), 0.0, 1.0])
+    lam_c = max(r.real for r in roots if abs(r.imag) < 1e-12)
+    row = next(r for r in rows if r.statement.startswith("λc"))
+    assert float(row.ours) == pytest.approx(lam_c, abs=5e-4)    # 4 significant digits
+    assert row.verdict == ("agree" if abs(lam_c - 1.98) <= 0.005 else "disagree")
+    ell_c = 2.0 * 0.6 ** (-2.0 / 3.0) * lam_c ** 2
+    row = next(r for r in rows if r.statement.startswith("L_c"))
+    assert float(row.ours) == pytest.approx(ell_c * (2.0 * 2.8 / lam_c) / 2.0, rel=5e-4)
+    line = next(r for r in rows if "takes place at λ_T" in r.statement)
+    assert "1.814" in line.note                                 # (1.126 - 0.6)/0.29
+
+
+def test_ctrl_c_during_a_solve_exits_130_and_keeps_only_complete_files(tmp_path):
+    """Interrupted while the Ca_B series solves (BEM), the command stops with 130 and one line
+    naming the files already written; no temporary file is left."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    out = tmp_path / "figs"
+    proc = subprocess.Popen([sys.executable, "-m", "correlations.cli", "figures", "--out",
+                             str(out), "--only", "phase", "shapes_cab"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.monotonic()
+    while not (out / "phase.png").exists() and time.monotonic() - t0 < 60:
+        time.sleep(0.1)
+    time.sleep(1.0)                                  # inside the first BEM solve
+    assert proc.poll() is None
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    last = err.strip().splitlines()[-1]
+    assert "interrupted" in last and str(out / "phase.png") in last
+    assert not [p for p in out.rglob("*") if p.name.startswith(".")]
