@@ -40,8 +40,8 @@ def data_dir(tmp_path):
 def test_placeholders_are_filled_with_fixed_digits(data_dir):
     text, counts = vr.render(TEMPLATE, records(), data_dir)
     assert "{{" not in text
-    assert "| λc(0.6) | 1.98120 | ±0.005 | test_geometry.py::test_chen | independent |" in text
-    assert "| pinned | 1.600922961 | 1e-07 | test_drop.py::test_regression_values | regression |" in text
+    assert "| λc(0.6) | 1.98120 | ±0.005 | `test_geometry.py::test_chen` | independent |" in text
+    assert "| pinned | 1.600922961 | 1e-07 | `test_drop.py::test_regression_values` | regression |" in text
     assert "| stored | 1.2568 |" in text
     assert counts["values"] == 3 and counts["independent"] == 1 and counts["regression"] == 1
     assert counts["stored"] == 1 and counts["untraced"] == 3 and counts["unused"] == []

@@ -23,7 +23,7 @@ Placeholders
     ``{{key}}`` or ``{{key:spec}}``: the value, formatted with the Python format ``spec``
     (fixed digits per placeholder, so regeneration is byte-identical);
     ``{{key@test}}``, ``{{key@tol}}``, ``{{key@kind}}``, ``{{key@reference:spec}}``,
-    ``{{key@source}}``: the record's fields (``@test`` gives ``file::test``);
+    ``{{key@source}}``: the record's fields (``@test`` gives `` `file::test` ``);
     ``{{json:<file in docs/data>#a/b/0/c:spec}}``: a value a committed script stored;
     ``{{stats}}``: the counts of the report (generated values by kind, and the numbers still
     typed in sections marked ``<!-- not yet generated -->``).
@@ -156,7 +156,7 @@ def _json_value(ref: str, data_dir: Path, cache: dict):
 def _field(rec: dict, field: str, spec: str, name: str) -> str:
     if field == "test":
         path, _, test = rec["test"].partition("::")
-        return f"{Path(path).name}::{test}"
+        return f"`{Path(path).name}::{test}`"
     value = rec.get(field)
     if value is None or value == "":
         raise MissingRecord(f"placeholder {{{{{name}@{field}}}}}: the record has no {field}")
