@@ -21,7 +21,8 @@ Records
 
 Placeholders
     ``{{key}}`` or ``{{key:spec}}``: the value, formatted with the Python format ``spec``
-    (fixed digits per placeholder, so regeneration is byte-identical);
+    (fixed digits per placeholder, so regeneration is byte-identical; a ``%`` spec gives
+    ``8.45 %``);
     ``{{key@test}}``, ``{{key@tol}}``, ``{{key@kind}}``, ``{{key@reference:spec}}``,
     ``{{key@source}}``: the record's fields (``@test`` gives `` `file::test` ``);
     ``{{json:<file in docs/data>#a/b/0/c:spec}}``: a value a committed script stored;
@@ -134,7 +135,8 @@ def _format(value, spec: str, name: str) -> str:
     if isinstance(value, float) and not spec:
         raise ValueError(f"placeholder {{{{{name}}}}} formats a float without a format spec; "
                          "give one (e.g. :.4g) so the output has fixed digits")
-    return format(value, spec)
+    text = format(value, spec)
+    return text[:-1] + " %" if spec.endswith("%") else text     # the report's "8.45 %"
 
 
 def _json_value(ref: str, data_dir: Path, cache: dict):
