@@ -94,3 +94,16 @@ def test_one_key_from_two_tests_is_refused():
     with pytest.raises(ValueError, match="geometry.lam_c_0.6"):
         vr.Recorder("tests/x.py::other", False, store).value("geometry.lam_c_0.6", 2.0)
 
+
+
+def test_max_and_min_aggregate_a_parametrized_test(data_dir):
+    store = {}
+    for k, err in ((0.3, 1e-12), (0.9, 4e-10)):
+        vr.Recorder(f"tests/lubrication/test_equations.py::test_cylinder[{k}]", False, store).value(
+            f"lub.cylinder_{k}", err, reference=0.0, tol="1e-9 rel")
+    text, counts = vr.render("{{max:lub.cylinder_*:.1e}} {{min:lub.cylinder_*:.0e}} "
+                             "{{max:lub.cylinder_*@tol}} {{max:lub.cylinder_*@test}}", store, data_dir)
+    assert text == "4.0e-10 1e-12 1e-9 rel `test_equations.py::test_cylinder`"
+    assert counts["unused"] == []
+    with pytest.raises(vr.MissingRecord, match=r"max:lub\.sphere_\*"):
+        vr.render("{{max:lub.sphere_*:.1e}}", store, data_dir)

@@ -25,6 +25,9 @@ Placeholders
     ``8.45 %``);
     ``{{key@test}}``, ``{{key@tol}}``, ``{{key@kind}}``, ``{{key@reference:spec}}``,
     ``{{key@source}}``: the record's fields (``@test`` gives `` `file::test` ``);
+    ``{{max:<glob>:spec}}``, ``{{min:<glob>:spec}}``: the largest / smallest value of the
+    records whose keys match the glob (e.g. the instances of a parametrized test), with the
+    fields ``@test``, ``@tol``, ``@kind`` where the matched records agree;
     ``{{json:<file in docs/data>#a/b/0/c:spec}}``: a value a committed script stored;
     ``{{stats}}``: the counts of the report (generated values by kind, and the numbers still
     typed in sections marked ``<!-- not yet generated -->``).
@@ -34,6 +37,7 @@ A placeholder without a record is an error naming it; a stale number is never ke
 from __future__ import annotations
 
 import argparse
+import fnmatch
 import json
 import os
 import re
@@ -50,7 +54,8 @@ KINDS = ("independent", "regression")
 FIELDS = ("test", "tol", "kind", "reference", "source")
 NOT_YET = "<!-- not yet generated -->"
 
-PLACEHOLDER = re.compile(r"\{\{\s*((?:json:)?[^{}:@\s]+)(?:@(\w+))?(?::([^{}]*))?\s*\}\}")
+PLACEHOLDER = re.compile(
+    r"\{\{\s*((?:json:|max:|min:)?[^{}:@\s]+)(?:@(\w+))?(?::([^{}]*))?\s*\}\}")
 NUMBER = re.compile(r"(?<![\w.])[-−+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?![\w])")
 
 
@@ -155,8 +160,34 @@ def _json_value(ref: str, data_dir: Path, cache: dict):
     return node
 
 
+def _aggregate(name: str, records: dict) -> dict:
+    """The record of ``max:<glob>`` / ``min:<glob>``: the extreme value of the matched records;
+    each field is kept where all matched records agree (``test`` without its parameters)."""
+    how, _, pattern = name.partition(":")
+    keys = sorted(k for k in records if fnmatch.fnmatchcase(k, pattern))
+    if not keys:
+        raise MissingRecord(f"placeholder {{{{{name}}}}} has no record: no key matches "
+                            f"{pattern!r} (run the recording tests first)")
+    matched = [records[k] for k in keys]
+    values = [r["value"] for r in matched]
+    rec = {"value": max(values) if how == "max" else min(values)}
+    for field in FIELDS:
+        seen = {re.sub(r"\[.*\]$", "", str(r.get(field))) if field == "test" else
+                json.dumps(r.get(field)) for r in matched}
+        if len(seen) == 1:
+            rec[field] = re.sub(r"\[.*\]$", "", matched[0][field]) if field == "test" \
+                else matched[0].get(field)
+    kinds = {r["kind"] for r in matched}
+    rec["kind"] = kinds.pop() if len(kinds) == 1 else "regression"
+    rec["n"] = len(keys)
+    return rec
+
+
 def _field(rec: dict, field: str, spec: str, name: str) -> str:
     if field == "test":
+        if "test" not in rec:
+            raise MissingRecord(f"placeholder {{{{{name}@test}}}}: the matched records come "
+                                "from different tests")
         path, _, test = rec["test"].partition("::")
         return f"`{Path(path).name}::{test}`"
     value = rec.get(field)
@@ -200,6 +231,14 @@ def render(template: str, records: dict, data_dir: Path = DATA) -> tuple[str, di
             counts["values"] += 1
             counts["stored"] += 1
             return _format(_json_value(name[5:], data_dir, cache), spec, name)
+        if name.startswith(("max:", "min:")):
+            rec = _aggregate(name, records)
+            used.update(k for k in records if fnmatch.fnmatchcase(k, name[4:]))
+            if field:
+                return _field(rec, field, spec, name)
+            counts["values"] += 1
+            counts[rec["kind"]] += 1
+            return _format(rec["value"], spec, name)
         if name not in records:
             raise MissingRecord(f"placeholder {{{{{name}}}}} has no record: no test recorded "
                                 f"{name!r} (run the recording tests first)")
