@@ -109,7 +109,7 @@ def load_records(directory, slow_file: Path | None = SLOW_RECORDS, *,
     """Merge the records of all workers in ``directory`` with the committed slow ones.
 
     Fresh records win over the committed slow file; with ``update_slow`` the slow records of
-    this run replace the committed file (a run that included the slow tests).
+    this run are written into the committed file (replacing those of the same keys).
     """
     fresh: dict = {}
     for path in sorted(Path(directory).glob("records-*.json")):
@@ -123,7 +123,7 @@ def load_records(directory, slow_file: Path | None = SLOW_RECORDS, *,
         committed = json.loads(Path(slow_file).read_text())
     if update_slow and slow_file is not None:
         from lubrication.io import write_json
-        committed = {k: r for k, r in fresh.items() if r.get("slow")}
+        committed = {**committed, **{k: r for k, r in fresh.items() if r.get("slow")}}
         write_json(slow_file, committed)
     return {**committed, **fresh}
 
