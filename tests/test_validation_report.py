@@ -14,7 +14,7 @@ TEMPLATE = """# Report
 |---|---|---|---|---|
 | λc(0.6) | {{geometry.lam_c_0.6:.5f}} | {{geometry.lam_c_0.6@tol}} | {{geometry.lam_c_0.6@test}} | {{geometry.lam_c_0.6@kind}} |
 | pinned | {{drop.V_ca_0.3:.9f}} | {{drop.V_ca_0.3@tol}} | {{drop.V_ca_0.3@test}} | {{drop.V_ca_0.3@kind}} |
-| stored | {{json:cases.json#cases/1/V:.4f}} | | | |
+| stored | {{json:cases.json#cases/1/V:.4f}} | {{json:cases.json#cases/len()}} cases | | |
 
 ## Later <!-- not yet generated -->
 λ_T(0.8) = 1.142 and 21.7 %.
@@ -42,10 +42,10 @@ def test_placeholders_are_filled_with_fixed_digits(data_dir):
     assert "{{" not in text
     assert "| λc(0.6) | 1.98120 | ±0.005 | `test_geometry.py::test_chen` | independent |" in text
     assert "| pinned | 1.600922961 | 1e-07 | `test_drop.py::test_regression_values` | regression |" in text
-    assert "| stored | 1.2568 |" in text
-    assert counts["values"] == 3 and counts["independent"] == 1 and counts["regression"] == 1
-    assert counts["stored"] == 1 and counts["untraced"] == 3 and counts["unused"] == []
-    assert "3 numbers generated" in text
+    assert "| stored | 1.2568 | 2 cases |" in text
+    assert counts["values"] == 4 and counts["independent"] == 1 and counts["regression"] == 1
+    assert counts["stored"] == 2 and counts["untraced"] == 3 and counts["unused"] == []
+    assert "4 numbers generated" in text
 
 
 def test_output_is_deterministic(data_dir):

@@ -28,7 +28,8 @@ Placeholders
     ``{{max:<glob>:spec}}``, ``{{min:<glob>:spec}}``: the largest / smallest value of the
     records whose keys match the glob (e.g. the instances of a parametrized test), with the
     fields ``@test``, ``@tol``, ``@kind`` where the matched records agree;
-    ``{{json:<file in docs/data>#a/b/0/c:spec}}``: a value a committed script stored;
+    ``{{json:<file in docs/data>#a/b/0/c:spec}}``: a value a committed script stored
+    (a last part ``len()`` gives the length of a stored list);
     ``{{stats}}``: the counts of the report (generated values by kind, and the numbers still
     typed in sections marked ``<!-- not yet generated -->``).
 A placeholder without a record is an error naming it; a stale number is never kept.
@@ -153,6 +154,9 @@ def _json_value(ref: str, data_dir: Path, cache: dict):
             raise MissingRecord(f"placeholder {{{{json:{ref}}}}}: no file {data_dir / file}")
     node = cache[file]
     for part in filter(None, path.split("/")):
+        if part == "len()":                      # the number of items of a stored list
+            node = len(node)
+            continue
         try:
             node = node[int(part)] if isinstance(node, list) else node[part]
         except (KeyError, IndexError, ValueError):
@@ -228,9 +232,11 @@ def render(template: str, records: dict, data_dir: Path = DATA) -> tuple[str, di
         if name.startswith("json:"):
             if field:
                 raise ValueError(f"placeholder {match.group(0)}: stored values have no fields")
-            counts["values"] += 1
-            counts["stored"] += 1
-            return _format(_json_value(name[5:], data_dir, cache), spec, name)
+            value = _json_value(name[5:], data_dir, cache)
+            if isinstance(value, (int, float)) and not isinstance(value, bool):   # not a label
+                counts["values"] += 1
+                counts["stored"] += 1
+            return _format(value, spec, name)
         if name.startswith(("max:", "min:")):
             rec = _aggregate(name, records)
             used.update(k for k in records if fnmatch.fnmatchcase(k, name[4:]))
