@@ -132,7 +132,8 @@ def test_speed_tends_to_2_minus_0p8_lam2_with_a_fifth_order_residual(small_drops
         report.value(f"drop.small_V_order_{i}", o, reference=5.0, tol="±0.3", source=notes)
     assert np.all(np.abs(order - 5.0) < 0.3), order
     assert -0.53 < report.value("drop.small_V_coefficient", res[0] / lams[0] ** 5,
-                                reference="−0.53 … −0.47", tol="inside (−0.53, −0.47)", kind="regression",
+                                reference="−0.53 … −0.47", tol="inside (−0.53, −0.47)",
+                                kind="regression",
                                 source="our earlier measurement") < -0.47
 
 

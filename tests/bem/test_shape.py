@@ -37,8 +37,8 @@ def test_sphere_curvatures_are_exact_including_the_poles(report):
     c = SpectralCurve.sphere(0.8, 6)
     tau = np.array([0.0, 1e-12, 1e-8, 1e-3, 0.3, 0.5, 0.5 + 1e-12, 0.9, 1 - 1e-9, 1.0])
     k1, k2 = c.curvatures(tau)
-    report.value("shape.sphere_curvature", max(np.max(np.abs(k1 - 1.25)), np.max(np.abs(k2 - 1.25))),
-                 reference=0.0, tol="1e-14 (κ1), 1e-13 (κ2)", source="1/a")
+    report.value("shape.sphere_curvature",
+                 max(np.max(np.abs(k1 - 1.25)), np.max(np.abs(k2 - 1.25))), reference=0.0, tol="1e-14 (κ1), 1e-13 (κ2)", source="1/a")
     assert np.max(np.abs(k1 - 1.25)) < 1e-14 and np.max(np.abs(k2 - 1.25)) < 1e-13
     x, r = c.position(tau)
     assert np.max(np.abs(np.hypot(x, r) - 0.8)) < 1e-14

@@ -121,9 +121,10 @@ def test_largest_deviation_from_the_printed_formulas_and_sample_values(report):
                         source="printed formulas, plain Python") <= RTOL
     for law, ref in refs.items():
         for D in (4.0, 6.0, 8.0, 10.0):
-            assert_rel(report.value(f"visc.sample_{law}_{D:g}", relative_viscosity(D, 0.45, law=law),
-                                    reference=ref(D, 0.45), tol=f"{RTOL:g} rel",
-                                    source="printed formula"), ref(D, 0.45))
+            eta = report.value(f"visc.sample_{law}_{D:g}", relative_viscosity(D, 0.45, law=law),
+                               reference=ref(D, 0.45), tol=f"{RTOL:g} rel",
+                               source="printed formula")
+            assert_rel(eta, ref(D, 0.45))
 
 
 @pytest.mark.parametrize("constants", sorted(FAHRAEUS_CONSTANTS))

@@ -106,7 +106,8 @@ def test_chen_2020_statements(report):
 
 def test_default_red_cell_geometry(report):
     """The default red cell (90 fL, 135 um^2): lam_c by numpy.roots, L_c from the volume of a
-    cylinder with hemispherical caps of radius R0/lam_c (in R0 units: ell_c = 2 + (4/3)(lam_c^3 - 1))."""
+    cylinder with hemispherical caps of radius R0/lam_c (in units of the cap radius:
+    ell_c = 2 + (4/3)(lam_c^3 - 1))."""
     nu, R0 = g.cell_from_volume_area(90.0, 135.0)
     lam_c = report.value("geometry.rbc_lam_c", g.critical_confinement(nu),
                          reference=largest_root(nu), tol="1e-12 rel", source="numpy.roots")
