@@ -25,15 +25,28 @@ def pytest_collection_modifyitems(items):
             item.add_marker(pytest.mark.record)
 
 
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """Keep the call phase's report on the item: the ``report`` fixture stores only the records
+    of tests that passed."""
+    outcome = yield
+    if call.when == "call":
+        item.validation_passed = outcome.get_result().passed
+
+
 @pytest.fixture
 def report(request):
     """``report.value(key, value, reference=, tol=, kind=, source=) -> value``: the value a
     test asserts, recorded for ``docs/validation.md`` (``tests/validation_report.py``) when
-    the environment variable VALIDATION_RECORDS names a directory; a no-op store otherwise."""
+    the environment variable VALIDATION_RECORDS names a directory and the test passes; a
+    no-op store otherwise."""
     from validation_report import RECORDS_ENV, Recorder, save_records
     recorder = Recorder(request.node.nodeid, request.node.get_closest_marker("slow") is not None,
                         _RECORDS)
     yield recorder
+    if not getattr(request.node, "validation_passed", False):    # a failed test records nothing
+        for key in [k for k, r in _RECORDS.items() if r["test"] == request.node.nodeid]:
+            del _RECORDS[key]
     directory = os.environ.get(RECORDS_ENV)
     if directory:
         save_records(directory, _RECORDS)
