@@ -110,3 +110,15 @@ def test_max_and_min_aggregate_a_parametrized_test(data_dir):
     assert counts["unused"] == []
     with pytest.raises(vr.MissingRecord, match=r"max:lub\.sphere_\*"):
         vr.render("{{max:lub.sphere_*:.1e}}", store, data_dir)
+
+
+def test_a_fresh_record_may_not_shadow_a_committed_one_of_another_test(tmp_path):
+    slow = {}
+    vr.Recorder("tests/bem/test_sphere.py::test_study[6]", True, slow).value("sphere.order6", 6.1)
+    slow_file = tmp_path / "slow.json"
+    slow_file.write_text(json.dumps(slow))
+    fast = {}
+    vr.Recorder("tests/bem/test_sphere.py::test_fast", False, fast).value("sphere.order6", 5.9)
+    vr.save_records(tmp_path / "run", fast)
+    with pytest.raises(ValueError, match="sphere.order6"):
+        vr.load_records(tmp_path / "run", slow_file)

@@ -122,6 +122,10 @@ def load_records(directory, slow_file: Path | None = SLOW_RECORDS, *,
     committed = {}
     if slow_file is not None and Path(slow_file).exists():
         committed = json.loads(Path(slow_file).read_text())
+    for key in set(committed) & set(fresh):
+        if committed[key]["test"] != fresh[key]["test"]:
+            raise ValueError(f"record {key!r} is written by {committed[key]['test']} "
+                             f"(committed) and {fresh[key]['test']}")
     if update_slow and slow_file is not None:
         from lubrication.io import write_json
         committed = {**committed, **{k: r for k, r in fresh.items() if r.get("slow")}}

@@ -153,7 +153,7 @@ def test_observed_order_with_six_point_panels(lam, report):
 @pytest.mark.slow
 @pytest.mark.parametrize("lam", [0.5, 0.9])
 @pytest.mark.parametrize("order, expected", [(4, 3.0), (6, 4.7), (8, 8.0)])
-def test_observed_order_study(lam, order, expected):
+def test_observed_order_study(lam, order, expected, report):
     """Overall observed order (first to last mesh) of V/U, Δp⁺ and K with p Gauss nodes per
     panel. Measured: p=4: 3.3-4.1 (lam 0.5), 2.9-3.3 (0.9); p=6: 6-7 (0.5), 4.3-6 (0.9, Δp⁺
     has a plateau where its error changes sign); p=8: 9-12 (both). Order ~p: the density
@@ -165,6 +165,8 @@ def test_observed_order_study(lam, order, expected):
         keep = e > 1e-12                         # above round-off
         ns_k, e_k = ns[keep], e[keep]
         o = math.log(e_k[0] / e_k[-1]) / math.log(ns_k[-1] / ns_k[0])
+        report.value(f"sphere.study{order}_{lam}_{k}", o, reference=order,
+                     tol=f"> {expected - 0.5:g}", source="p Gauss nodes per panel: order ~p")
         assert o > expected - 0.5, (k, e, o)
 
 
