@@ -5,7 +5,7 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV   := .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test validation benchmark clean
+.PHONY: run test validation validation-report benchmark clean
 
 $(BIN)/vesicle-tube: pyproject.toml
 	$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11) and "Python >= 3.11 is required")'
@@ -23,6 +23,17 @@ test: $(BIN)/vesicle-tube
 
 validation: $(BIN)/vesicle-tube
 	$(BIN)/python -m pytest -q -n 2 -m slow
+
+# docs/validation.md from docs/validation.md.in: the tests that record (fixture `report`) write
+# the values they assert, then tests/validation_report.py fills the template. SLOW=1 also runs
+# the slow recording tests and stores their records in docs/data/validation_records_slow.json;
+# without it those committed records are used.
+RECORDS := build/validation-records
+validation-report: $(BIN)/vesicle-tube
+	rm -rf $(RECORDS)
+	VALIDATION_RECORDS=$(RECORDS) $(BIN)/python -m pytest -q -n 2 \
+	    -m '$(if $(SLOW),record,record and (not slow or ci))'
+	$(BIN)/python tests/validation_report.py render --records $(RECORDS) $(if $(SLOW),--update-slow)
 
 benchmark: $(BIN)/vesicle-tube
 	$(BIN)/python tests/benchmarks/run_benchmarks.py

@@ -829,7 +829,7 @@ def _slope_in_film(x, tension, r):
 
 def figure_tension(ctx):
     """Membrane tension along the vesicle at (ν, λ) = (0.6, 1.94), Ca_B = 50 (the paper's
-    γ_max ≃ 1.2e3 ηU, §III.B): the lubrication solution, and one BEM solve started from the
+    γ_max ≃ 1.2e3 ηU, §IV.B): the lubrication solution, and one BEM solve started from the
     nearest stored BEM shape, drawn only if it converged."""
     nu, lam = TENSION_POINT
     lub, c1 = ctx.cached("lubrication_tension", {"nu": nu, "lam": lam, "ca_b": CA_B},

@@ -1,4 +1,5 @@
-"""Test-suite configuration: a reproducible Hypothesis profile and a headless matplotlib."""
+"""Test-suite configuration: a reproducible Hypothesis profile, a headless matplotlib and the
+``report`` fixture that records asserted values for the validation report."""
 
 import os
 
@@ -13,6 +14,42 @@ settings.register_profile("ci", deadline=None, derandomize=True, max_examples=60
                           suppress_health_check=[HealthCheck.too_slow])
 settings.register_profile("thorough", deadline=None, max_examples=1000)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+_RECORDS: dict = {}
+
+
+def pytest_collection_modifyitems(items):
+    """Mark the tests that record values for the report, so ``-m record`` selects them."""
+    for item in items:
+        if "report" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.record)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """Keep the call phase's report on the item: the ``report`` fixture stores only the records
+    of tests that passed."""
+    outcome = yield
+    if call.when == "call":
+        item.validation_passed = outcome.get_result().passed
+
+
+@pytest.fixture
+def report(request):
+    """``report.value(key, value, reference=, tol=, kind=, source=) -> value``: the value a
+    test asserts, recorded for ``docs/validation.md`` (``tests/validation_report.py``) when
+    the environment variable VALIDATION_RECORDS names a directory and the test passes; a
+    no-op store otherwise."""
+    from validation_report import RECORDS_ENV, Recorder, save_records
+    recorder = Recorder(request.node.nodeid, request.node.get_closest_marker("slow") is not None,
+                        _RECORDS)
+    yield recorder
+    if not getattr(request.node, "validation_passed", False):    # a failed test records nothing
+        for key in [k for k, r in _RECORDS.items() if r["test"] == request.node.nodeid]:
+            del _RECORDS[key]
+    directory = os.environ.get(RECORDS_ENV)
+    if directory:
+        save_records(directory, _RECORDS)
 
 
 @pytest.fixture

@@ -42,18 +42,24 @@ def _spheroid(a, b, n=64):
                      density=equidistributing_density(base, 16))
 
 
-def test_sphere_has_no_bending_force_and_energy_8_pi_kappa():
+def test_sphere_has_no_bending_force_and_energy_8_pi_kappa(report):
+    force, energy = 0.0, 0.0
     for a in (0.3, 0.8, 1.7):
         c = SpectralCurve.sphere(a, 12)
         tau = np.concatenate([[0.0, 1e-9, 1e-4], np.linspace(0.01, 0.99, 41), [1 - 1e-6, 1.0]])
         fx, fr = bending_force(c, tau, kappa=1.0)
         scale = 1.0 / a**3                                   # kappa/a^3
+        force = max(force, np.max(np.abs(fx)) / scale, np.max(np.abs(fr)) / scale)
+        energy = max(energy, abs(bending_energy(c) / (8 * math.pi) - 1))
         assert np.max(np.abs(fx)) < 1e-10 * scale and np.max(np.abs(fr)) < 1e-10 * scale
         assert abs(bending_energy(c) / (8 * math.pi) - 1) < 1e-13
+    report.value("mem.sphere_force", force, reference=0.0, tol="1e-10 κ/a³",
+                 source="0 on a sphere")
+    report.value("mem.sphere_energy", energy, reference=0.0, tol="1e-13 rel", source="8 pi kappa")
 
 
 @pytest.mark.parametrize("a, b", [(1.0, 0.6), (0.6, 1.0), (1.3, 0.7)])
-def test_spheroid_curvature_terms_match_sympy(a, b):
+def test_spheroid_curvature_terms_match_sympy(a, b, report):
     """H, K and Delta_s H of prolate and oblate spheroids against the symbolic closed form.
     Measured max relative errors of Delta_s H: ~1e-10 (64 modes)."""
     Hf, Kf, lapf = _spheroid_closed_form(a, b)
@@ -63,6 +69,10 @@ def test_spheroid_curvature_terms_match_sympy(a, b):
     t = np.arccos(np.clip(-x / a, -1.0, 1.0))
     H, K, lap = surface_laplacian_H(c, tau)
     scale = np.max(np.abs(lapf(t)))
+    report.value(f"mem.lap_H_{a}_{b}", np.max(np.abs(lap - lapf(t))) / scale, reference=0.0,
+                 tol="1e-7 (of the largest value)", source="sympy closed form")
+    report.value(f"mem.H_{a}_{b}", np.max(np.abs(H - Hf(t))) / np.max(np.abs(Hf(t))),
+                 reference=0.0, tol="1e-9 (of the largest value)", source="sympy closed form")
     assert np.max(np.abs(H - Hf(t))) < 1e-9 * np.max(np.abs(Hf(t)))
     assert np.max(np.abs(K - Kf(t))) < 1e-9 * np.max(np.abs(Kf(t)))
     assert np.max(np.abs(lap - lapf(t))) < 1e-7 * scale, np.max(np.abs(lap - lapf(t))) / scale
@@ -113,7 +123,7 @@ def _surface_rule(curve, n=200):
 
 
 @pytest.mark.parametrize("j", [1, 2, 4])
-def test_area_rate_and_bending_virtual_work(j):
+def test_area_rate_and_bending_virtual_work(j, report):
     """int f_gamma . dX dA = -gamma dA (constant gamma) and int f_b . dX dA = -dE for shape
     variations of a bullet-like curve (central differences, h = 1e-6)."""
     modes = np.array([0.0, 0.25, -0.08, 0.05, 0.02, -0.01])
@@ -129,10 +139,14 @@ def test_area_rate_and_bending_virtual_work(j):
     fx, fr = tension_force(c, [gamma], t)
     work = np.sum((fx * dX[0] + fr * dX[1]) * dA)
     dArea = (c1.area() - c2.area()) / (2 * h)
+    report.value(f"mem.work_tension_{j}", abs(work + gamma * dArea) / (1 + abs(gamma * dArea)),
+                 reference=0.0, tol=1e-7, source="virtual work: -gamma dA")
     assert abs(work + gamma * dArea) < 1e-7 * (1 + abs(gamma * dArea)), (work, dArea)
     bx, br = bending_force(c, t, kappa=1.0)
     work_b = np.sum((bx * dX[0] + br * dX[1]) * dA)
     dE = (bending_energy(c1) - bending_energy(c2)) / (2 * h)
+    report.value(f"mem.work_bending_{j}", abs(work_b + dE) / (1 + abs(dE)), reference=0.0,
+                 tol=1e-6, source="virtual work: -dE")
     assert abs(work_b + dE) < 1e-6 * (1 + abs(dE)), (work_b, dE)
 
 

@@ -33,10 +33,12 @@ def _spheroid_error(curve, a, b, n=2001):
     return np.max(np.abs(k1 / e1 - 1)), np.max(np.abs(k2 / e2 - 1)), abs(vol)
 
 
-def test_sphere_curvatures_are_exact_including_the_poles():
+def test_sphere_curvatures_are_exact_including_the_poles(report):
     c = SpectralCurve.sphere(0.8, 6)
     tau = np.array([0.0, 1e-12, 1e-8, 1e-3, 0.3, 0.5, 0.5 + 1e-12, 0.9, 1 - 1e-9, 1.0])
     k1, k2 = c.curvatures(tau)
+    report.value("shape.sphere_curvature",
+                 max(np.max(np.abs(k1 - 1.25)), np.max(np.abs(k2 - 1.25))), reference=0.0, tol="1e-14 (κ1), 1e-13 (κ2)", source="1/a")
     assert np.max(np.abs(k1 - 1.25)) < 1e-14 and np.max(np.abs(k2 - 1.25)) < 1e-13
     x, r = c.position(tau)
     assert np.max(np.abs(np.hypot(x, r) - 0.8)) < 1e-14
@@ -48,13 +50,17 @@ def test_sphere_curvatures_are_exact_including_the_poles():
 
 @pytest.mark.parametrize("a, b, n, bound", [(1.0, 0.6, 48, 1e-8), (0.5, 1.0, 48, 1e-11),
                                             (2.0, 0.5, 64, 5e-5)])
-def test_spheroid_curvatures_match_the_closed_form(a, b, n, bound):
+def test_spheroid_curvatures_match_the_closed_form(a, b, n, bound, report):
     """Prolate, oblate and 4:1 prolate spheroids fitted with an equidistributing density.
     Measured max relative curvature errors: 8e-14 (1:0.6), 2e-13 (0.5:1), 5e-6 (2:0.5)."""
     base = fit_curve(spheroid_curve(a, b), 0.0, math.pi, 24)
     curve = fit_curve(spheroid_curve(a, b), 0.0, math.pi, n,
                       density=equidistributing_density(base, 16))
     e1, e2, ev = _spheroid_error(curve, a, b)
+    report.value(f"shape.spheroid_{a:g}_{b:g}", max(e1, e2), reference=0.0, tol=f"{bound:g} rel",
+                 source="closed-form curvatures of the spheroid")
+    report.value(f"shape.spheroid_volume_{a:g}_{b:g}", ev, reference=0.0, tol=1e-10,
+                 source="4 pi a b^2/3")
     assert e1 < bound and e2 < bound, (e1, e2)
     assert ev < 1e-10
     # pole limits: both principal curvatures equal a/b^2 at t = 0 and pi

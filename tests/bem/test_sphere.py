@@ -54,20 +54,28 @@ def small_spheres():
     return lams, [solve_sphere_mesh(lam, 6) for lam in lams]
 
 
-def test_velocity_tends_to_faxen_with_a_fifth_order_residual(small_spheres):
+def test_velocity_tends_to_faxen_with_a_fifth_order_residual(small_spheres, report):
     """V/U = 2 - (4/3) lam^2 + c lam^5; measured c -> 0.32 and residual order 5.0."""
     lams, sols = small_spheres
     res = np.array([s["V_over_U"] - (2 - 4 / 3 * lam**2) for lam, s in zip(lams, sols)])
     order = np.log(res[1:] / res[:-1]) / np.log(lams[1:] / lams[:-1])
+    for i, o in enumerate(order):
+        report.value(f"sphere.faxen_order_{i}", o, reference=5.0, tol="±0.15",
+                     source="Faxén, notes §3: first neglected term lam^5")
     assert np.all(np.abs(order - 5.0) < 0.15), order
-    assert 0.3 < res[0] / lams[0] ** 5 < 0.34
+    assert 0.3 < report.value("sphere.faxen_coefficient", res[0] / lams[0] ** 5,
+                              reference="0.3–0.34", tol="inside (0.3, 0.34)", kind="regression",
+                              source="our earlier measurement") < 0.34
 
 
-def test_pressure_drop_tends_to_16_lam6_with_an_eleventh_order_residual(small_spheres):
+def test_pressure_drop_tends_to_16_lam6_with_an_eleventh_order_residual(small_spheres, report):
     """Δp⁺a/(ηU) = 16 lam^6 (1 + O(lam^5)) (Chen et al. 2020 eq. small2); measured order 11."""
     lams, sols = small_spheres
     res = np.array([s["dp_plus_R0"] - 16 * lam**6 for lam, s in zip(lams, sols)])
     order = np.log(res[1:] / res[:-1]) / np.log(lams[1:] / lams[:-1])
+    for i, o in enumerate(order):
+        report.value(f"sphere.dp_order_{i}", o, reference=11.0, tol="±0.5",
+                     source="Chen et al. 2020 eq. small2, 16 lam^6 (1 + O(lam^5))")
     assert np.all(np.abs(order - 11.0) < 0.5), order
     # eliminating lam: Δp⁺a/(ηU) ≈ (27/4)(2 - V/U)^3 to relative O(lam^3)
     for lam, s in zip(lams, sols):
@@ -75,18 +83,20 @@ def test_pressure_drop_tends_to_16_lam6_with_an_eleventh_order_residual(small_sp
 
 
 # ------------------------------------------------------------------ sign and consistency checks
-def test_reciprocal_theorem_links_the_free_and_the_translating_problems():
+def test_reciprocal_theorem_links_the_free_and_the_translating_problems(report):
     """Force on a held sphere F_A = -Q Δp_B/V_B (reciprocal theorem with the translating
     problem B), so V_free = -π Δp_B /(6π a K): checks the sign of the Δp⁺ closure."""
     lam = 0.6
     s = solve_sphere_mesh(lam, 6)
     v_rec = -math.pi * s["dp_translating_R"] / (6 * math.pi * lam * s["drag_K"])
-    assert abs(s["V_over_U"] / v_rec - 1) < 1e-12
+    assert report.value("sphere.reciprocal", abs(s["V_over_U"] / v_rec - 1), reference=0.0,
+                        tol="1e-12 rel", source="reciprocal theorem") < 1e-12
     assert s["dp_plus_R"] > 0 and s["dp_translating_R"] < 0
 
 
-def test_null_multiplier_and_residual_are_small():
+def test_null_multiplier_and_residual_are_small(report):
     s = solve_sphere_mesh(0.7, 6)
+    report.value("sphere.residual", s["residual"], reference=0.0, tol=1e-12, source="the BIE")
     assert s["residual"] < 1e-12
     assert s["null_multiplier"] < 1e-10
 
@@ -126,7 +136,7 @@ def _errors(lam, order, ns, ref):
 
 
 @pytest.mark.parametrize("lam", [0.5, 0.9])
-def test_observed_order_with_six_point_panels(lam):
+def test_observed_order_with_six_point_panels(lam, report):
     """Gauss order p = 6: observed order of V/U, Δp⁺ and K under panel refinement ~6 (= p,
     the order of the density interpolation in the near and self panels)."""
     ref = solve_sphere_mesh(lam, 16)
@@ -135,13 +145,15 @@ def test_observed_order_with_six_point_panels(lam):
     for k, e in err.items():
         # overall order over the range (single steps can stall where the error changes sign)
         order = math.log(e[0] / e[-1]) / math.log(ns[-1] / ns[0])
+        report.value(f"sphere.order6_{lam}_{k}", order, reference=6, tol="> 4.5",
+                     source="p Gauss nodes per panel: order ~p")
         assert order > 4.5, (k, e, order)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("lam", [0.5, 0.9])
 @pytest.mark.parametrize("order, expected", [(4, 3.0), (6, 4.7), (8, 8.0)])
-def test_observed_order_study(lam, order, expected):
+def test_observed_order_study(lam, order, expected, report):
     """Overall observed order (first to last mesh) of V/U, Δp⁺ and K with p Gauss nodes per
     panel. Measured: p=4: 3.3-4.1 (lam 0.5), 2.9-3.3 (0.9); p=6: 6-7 (0.5), 4.3-6 (0.9, Δp⁺
     has a plateau where its error changes sign); p=8: 9-12 (both). Order ~p: the density
@@ -153,24 +165,29 @@ def test_observed_order_study(lam, order, expected):
         keep = e > 1e-12                         # above round-off
         ns_k, e_k = ns[keep], e[keep]
         o = math.log(e_k[0] / e_k[-1]) / math.log(ns_k[-1] / ns_k[0])
+        report.value(f"sphere.study{order}_{lam}_{k}", o, reference=order,
+                     tol=f"> {expected - 0.5:g}", source="p Gauss nodes per panel: order ~p")
         assert o > expected - 0.5, (k, e, o)
 
 
 @pytest.mark.parametrize("lam", [0.3, 0.6, 0.9])
-def test_sphere_converges_to_the_requested_accuracy(lam):
+def test_sphere_converges_to_the_requested_accuracy(lam, report):
     """V/U to <= 1e-8 and Δp⁺ to <= 1e-6 relative, checked against a much finer mesh."""
     res = solve_sphere(lam, tol=1e-10)
     assert res.converged, res.message
     fine = solve_sphere_mesh(lam, 2 * res.panels["body"] + 4)
-    assert abs(res.V_over_U / fine["V_over_U"] - 1) < 1e-8
-    assert abs(res.dp_plus_R / fine["dp_plus_R"] - 1) < 1e-6
+    fine_source = f"a mesh of {2 * res.panels['body'] + 4} body panels"
+    assert report.value(f"sphere.fine_V_{lam}", abs(res.V_over_U / fine["V_over_U"] - 1),
+                        reference=0.0, tol="1e-8 rel", source=fine_source) < 1e-8
+    assert report.value(f"sphere.fine_dp_{lam}", abs(res.dp_plus_R / fine["dp_plus_R"] - 1),
+                        reference=0.0, tol="1e-6 rel", source=fine_source) < 1e-6
     assert abs(res.drag_K / fine["drag_K"] - 1) < 1e-8
     assert res.V_over_U_err < 1e-8 * res.V_over_U
 
 
 @pytest.mark.slow
 @pytest.mark.ci
-def test_near_contact_velocity_and_convergence():
+def test_near_contact_velocity_and_convergence(report):
     """Near contact V/U = 1 + 4ε/3 + O(ε²) (notes §3; Bungay & Brenner 1973), measured
     (V/U - 1 - 4ε/3)/ε² = 0.23, 0.21, 0.17, 0.14 at ε = 0.1, 0.05, 0.02, 0.01; converged.
     The quiescent drag approaches the lubrication limit derived for zero net flux."""
@@ -178,30 +195,42 @@ def test_near_contact_velocity_and_convergence():
         eps = 1 - lam
         res = solve_sphere(lam, tol=1e-9)
         assert res.converged, res.message
-        assert abs(res.V_over_U - 1 - 4 * eps / 3) < 0.3 * eps**2
+        c2 = report.value(f"sphere.contact_c2_{lam}", (res.V_over_U - 1 - 4 * eps / 3) / eps**2,
+                          reference=0.0, tol="±0.3",
+                          source="notes §3: V/U = 1 + 4 eps/3 + O(eps^2)")
+        assert abs(c2) < 0.3
         # translating sphere, lubrication (zero net flux): K -> (3 sqrt(2) pi / 8) eps^(-5/2);
         # measured K eps^(5/2) / 1.6661 = 0.891, 0.942, 0.976, 0.988 at eps = 0.1 ... 0.01
         k_lub = 3 * math.sqrt(2) * math.pi / 8 * eps**-2.5
-        assert abs(res.drag_K / k_lub - 1) < 1.5 * eps
+        ratio = report.value(f"sphere.contact_K_{lam}", res.drag_K / k_lub, reference=1.0,
+                             tol="1.5 eps", source="lubrication limit (3 sqrt(2) pi/8) eps^(-5/2)")
+        assert abs(ratio - 1) < 1.5 * eps
 
 
 # ------------------------------------------------------------------ published values
-def test_translating_drag_agrees_with_bohlin_at_small_size():
+def test_translating_drag_agrees_with_bohlin_at_small_size(report):
     """Bohlin's series is accurate for small lam: measured differences 4e-7 (0.05),
     3e-6 (0.1), 3e-5 (0.2) relative; Haberman & Sayre's closed form differs by 7e-5 at 0.1
     (its lam coefficient is 2.1050 instead of 2.10444)."""
     for lam, bound in ((0.05, 1e-6), (0.1, 5e-6), (0.2, 5e-5)):
-        K = sphere_drag(lam, panels=6)
-        assert abs(K / bohlin_drag(lam) - 1) < bound, (lam, K)
+        K = report.value(f"sphere.K_{lam}", sphere_drag(lam, panels=6), reference=bohlin_drag(lam),
+                         tol=f"{bound:g} rel", source="Bohlin (1960) series")
+        assert abs(report.value(f"sphere.K_bohlin_{lam}", K / bohlin_drag(lam) - 1,
+                                reference=0.0, tol=f"{bound:g}", source="Bohlin (1960) series")
+                   ) < bound, (lam, K)
         assert abs(K / haberman_sayre_drag(lam) - 1) < 3e-4
 
 
-def test_free_velocity_against_haberman_sayre():
+def test_free_velocity_against_haberman_sayre(report):
     """Haberman & Sayre's V/U agrees to O(lam^2); its lam^5 coefficient differs from ours
     (1.11 vs 0.32 in V/U), so the difference grows like lam^5: measured 4e-6 relative at
     0.1, 8.5e-3 at 0.5, 8.0e-2 at 0.9 (the formula is a truncated reflection result)."""
     for lam, bound in ((0.1, 1e-5), (0.3, 1.5e-3), (0.5, 1.2e-2)):
-        V = solve_sphere_mesh(lam, 6)["V_over_U"]
+        V = report.value(f"sphere.V_{lam}", solve_sphere_mesh(lam, 6)["V_over_U"],
+                         reference=haberman_sayre_velocity(lam), tol=f"{bound:g} rel",
+                         source="Haberman & Sayre (1958)")
+        report.value(f"sphere.V_hs_diff_{lam}", V / haberman_sayre_velocity(lam) - 1,
+                     reference=0.0, tol=f"{bound:g}", source="Haberman & Sayre (1958)")
         assert abs(V / haberman_sayre_velocity(lam) - 1) < bound, (lam, V)
 
 

@@ -101,7 +101,7 @@ def test_coarse_solution_conserves_volume_and_area_and_is_near_the_reference(coa
     assert drop == pytest.approx(res.tension_front - res.tension_rear, rel=1e-3)
 
 
-def test_wall_shear_balances_the_extra_pressure_drop(coarse):
+def test_wall_shear_balances_the_extra_pressure_drop(coarse, report):
     """Force balance on the fluid in the tube: the extra wall shear integrates to the extra
     pressure force, int (tau_w - 4) 2 pi R dx = pi R^2 dp+ (dp+ here from the reciprocal
     theorem on the membrane load, an independent route). Measured at (0.9, 1.0), 16 modes:
@@ -111,6 +111,10 @@ def test_wall_shear_balances_the_extra_pressure_drop(coarse):
     op = vesicle_operator(coarse)
     x, tw = op.wall_shear(coarse.curve(), coarse.tension_modes)
     extra = np.sum((tw - 4.0) * 2 * math.pi * op.wall.w.ravel())
+    report.value("ves.wall_shear_balance", abs(extra / (math.pi * coarse.dp_plus_R) - 1),
+                 reference=0.0, tol="1e-8 rel", source="reciprocal-theorem dp+ (force balance)")
+    report.value("ves.wall_shear_max", coarse.wall_shear_max, reference="4 < τ < 4 + 2V/h",
+                 tol="inside", source="Poiseuille wall shear 4 and the film's shear bound")
     assert extra == pytest.approx(math.pi * coarse.dp_plus_R, rel=1e-8)
     assert coarse.wall_shear_max == pytest.approx(np.max(tw), rel=1e-3)   # other wall mesh
     assert 4.0 < coarse.wall_shear_max < 4.0 + 2 * coarse.V_over_U / coarse.film_min
@@ -119,7 +123,7 @@ def test_wall_shear_balances_the_extra_pressure_drop(coarse):
     assert 0.0 < peak < coarse.ell                                    # beside the vesicle
 
 
-def test_vesicle_wall_mesh_is_converged(coarse):
+def test_vesicle_wall_mesh_is_converged(coarse, report):
     """The vesicle's wall mesh (WALL_REFINEMENT = 0.25 of the drop's rule) against the drop's
     own 4x finer wall at the same shape: V/U and dp+ agree to 1e-7 relative (measured 2e-11;
     1e-7 also at nu = 0.6, lam/lam_c = 0.98, see docs/validation.md)."""
@@ -131,6 +135,8 @@ def test_vesicle_wall_mesh_is_converged(coarse):
                            replace(op.disc, wall_refinement=1.0), coarse.curve(), op.n_tension)
     assert fine.wall.x.size > 2 * op.wall.x.size
     a, b = (o.evaluate(coarse.curve()) for o in (op, fine))
+    report.value("ves.wall_mesh", max(abs(b["V"] / a["V"] - 1), abs(b["dp"] / a["dp"] - 1)),
+                 reference=0.0, tol="1e-7 rel", source="the drop's 4x finer wall")
     assert b["V"] == pytest.approx(a["V"], rel=1e-7)
     assert b["dp"] == pytest.approx(a["dp"], rel=1e-7)
 
@@ -216,25 +222,40 @@ def test_self_intersection_and_wall_contact_are_detected():
 
 # ------------------------------------------------------------------ validation (slow)
 @pytest.mark.slow
-def test_small_vesicle_moves_like_a_sphere():
+def test_small_vesicle_moves_like_a_sphere(report):
     """nu = 0.98, lam = 0.3: V/U near 2 - (4/3) lam^2 (1 %), dp+R0 near 16 lam^6 (few %).
     Measured: V/U = 1.881379 (+0.07 %), dp+R0/(eta U) = 0.0117214 (+0.5 %), residual 6e-8."""
     lam = 0.3
     res = solve_vesicle(0.98, lam)
     assert res.success, res.message
+    report.value("ves.small_V", res.V_over_U, reference=2 - 4 / 3 * lam**2, tol="1 %",
+                 source="rigid sphere, Faxén: 2 - (4/3) lam^2")
+    report.value("ves.small_dp", res.dp_plus_R0, reference=16 * lam**6, tol="3 %",
+                 source="Chen et al. eq. small2: 16 lam^6")
     assert res.V_over_U == pytest.approx(2 - 4 / 3 * lam**2, rel=0.01)
     assert res.dp_plus_R0 == pytest.approx(16 * lam**6, rel=0.03)
     assert res.volume_error <= 1e-8 and res.area_error <= 1e-8
 
 
 @pytest.mark.slow          # ~30 s; in make validation (CI's ci subset covers lubrication and drop)
-def test_residual_falls_spectrally_with_the_modes_at_nu09_lam1():
+def test_residual_falls_spectrally_with_the_modes_at_nu09_lam1(report):
     """Residual floor of the least squares against the number of modes N (16, 24, 32): it
     must fall geometrically (measured: /15 and /14 per +8 modes); V/U and dp+ converge."""
     res = solve_vesicle(0.9, 1.0, tol=1e-12, max_modes=32)
     n, resid, V, dp, _gmax = (np.array(c) for c in zip(*res.refinement))
     assert list(n) == [16, 24, 32]
     factor = resid[:-1] / resid[1:]
+    for k, (ni, r, v, d) in enumerate(zip(n, resid, V, dp)):
+        report.value(f"ves.spectral_residual_{ni}", r, source="max|u - V e_x|, (0.9, 1.0)")
+        report.value(f"ves.spectral_V_{ni}", v, source="(0.9, 1.0)")
+        report.value(f"ves.spectral_dp_{ni}", d, source="(0.9, 1.0)")
+    for k, f in enumerate(factor):
+        report.value(f"ves.spectral_factor_{k}", f, reference="geometric", tol="> 8",
+                     source="residual per +8 modes")
+    report.value("ves.spectral_V_ref", V[-1], reference=REF_09_10["V_over_U"], tol="±2e-6",
+                 kind="regression", source="REF_09_10")
+    report.value("ves.spectral_dp_ref", dp[-1], reference=REF_09_10["dp_plus_R0"], tol="1e-6 rel",
+                 kind="regression", source="REF_09_10")
     assert np.all(factor > 8), f"{resid=}, {factor=}"
     assert resid[-1] < 1e-4
     assert res.volume_error <= 1e-8 and res.area_error <= 1e-8
@@ -265,7 +286,7 @@ def test_cli_reports_an_unconverged_run_with_exit_1(capsys, tmp_path):
 
 
 @pytest.mark.slow          # ~35 s
-def test_parachute_bullet_transition_at_nu_0p9_near_chen_line():
+def test_parachute_bullet_transition_at_nu_0p9_near_chen_line(report):
     """The rear curvature changes sign (concave rear: parachute) at lam_T; Chen et al. 2020
     eq. transition gives lam_T(0.9) = 0.779. Measured with 32 modes (residual 2e-5): rear
     curvature +0.0015 at lam = 0.80, -0.092 at 0.82, so lam_T = 0.800 (+2.7 %); asserted within
@@ -277,12 +298,14 @@ def test_parachute_bullet_transition_at_nu_0p9_near_chen_line():
     assert a.shape_class == "parachute" and b.shape_class == "bullet"
     ka, kb = a.curvature_rear, b.curvature_rear
     lam_t = a.lam + (b.lam - a.lam) * ka / (ka - kb)
+    report.value("ves.lam_T_0.9", lam_t, reference=transition_confinement_chen2020(0.9),
+                 tol="5 %", source="Chen et al. 2020 eq. transition")
     assert lam_t == pytest.approx(transition_confinement_chen2020(0.9), rel=0.05)
 
 
 @pytest.mark.slow
 @pytest.mark.ci            # ~1 min: the long-vesicle route (bend density, lubrication seed) in CI
-def test_parachute_bullet_transition_at_nu_0p7_near_chen_line():
+def test_parachute_bullet_transition_at_nu_0p7_near_chen_line(report):
     """nu = 0.7 (long: l_c lam/lam_c ~ 6.4): parachute at lam = 1.46 (rear curvature +0.1315),
     bullet at 1.48 (-0.1158), 32 modes each (residual 4.3e-4, 2.5e-4), so lam_T = 1.4706
     against Chen et al. 2020 eq. transition 1.469 (+0.1 %), measured with the earlier 8-mode
@@ -295,11 +318,13 @@ def test_parachute_bullet_transition_at_nu_0p7_near_chen_line():
     assert a.shape_class == "parachute" and b.shape_class == "bullet"
     ka, kb = a.curvature_rear, b.curvature_rear
     lam_t = a.lam + (b.lam - a.lam) * ka / (ka - kb)
+    report.value("ves.lam_T_0.7", lam_t, reference=transition_confinement_chen2020(0.7),
+                 tol="5 %", source="Chen et al. 2020 eq. transition")
     assert lam_t == pytest.approx(transition_confinement_chen2020(0.7), rel=0.05)
 
 
 @pytest.mark.slow          # ~8 min (two long vesicles, 16..56 modes each)
-def test_parachute_bullet_transition_at_nu_0p6_near_chen_line():
+def test_parachute_bullet_transition_at_nu_0p6_near_chen_line(report):
     """nu = 0.6 (long vesicles, "bend" density, started from lubrication): parachute at
     lam = 1.78 (rear curvature +0.762, gap 6.96 % of R), bullet at 1.84 (-0.511, 5.53 %), so
     lam_T = 1.816 against Chen et al. 2020 eq. transition 1.814 (+0.1 %; their text: ~1.8, gap
@@ -314,12 +339,17 @@ def test_parachute_bullet_transition_at_nu_0p6_near_chen_line():
     ka, kb = a.curvature_rear, b.curvature_rear
     w = ka / (ka - kb)
     lam_t = a.lam + (b.lam - a.lam) * w
+    report.value("ves.lam_T_0.6", lam_t, reference=transition_confinement_chen2020(0.6),
+                 tol="5 %", source="Chen et al. 2020 eq. transition")
+    gap = report.value("ves.gap_at_lam_T_0.6", a.film_min + (b.film_min - a.film_min) * w,
+                       reference=0.07, tol="inside (0.05, 0.07)",
+                       source="Chen et al. 2020: ≈ 7 %")
     assert lam_t == pytest.approx(transition_confinement_chen2020(0.6), rel=0.05)
-    assert 0.05 < a.film_min + (b.film_min - a.film_min) * w < 0.07
+    assert 0.05 < gap < 0.07
 
 
 @pytest.mark.slow          # ~7 min
-def test_near_critical_discrepancy_with_lubrication_shrinks():
+def test_near_critical_discrepancy_with_lubrication_shrinks(report):
     """nu = 0.9, Ca_B = 50: lam/lam_c = 0.95 (automatic continuation from lubrication at 0.9)
     then 0.97 continued from it, 48 modes, against solve_lubrication at the same Ca_B.
     Measured: V/U 1.048257 / 1.028833 (lubrication 1.048661 / 1.028948: -0.039 %, -0.011 %);
@@ -335,6 +365,12 @@ def test_near_critical_discrepancy_with_lubrication_shrinks():
         assert res.success, res.message
         assert res.volume_error <= 1e-8 and res.area_error <= 1e-8
         lub = solve_lubrication(0.9, lam_ratio=ratio, ca_b=50.0)
+        report.value(f"ves.nc_V_{ratio}", res.V_over_U, reference=lub.V_over_U, tol="1e-3 rel",
+                     source="lubrication solver, same Ca_B")
+        report.value(f"ves.nc_ell_ratio_{ratio}", res.ell / critical_length(0.9),
+                     reference=ratio, tol="5e-3 rel", source="Chen et al. eq. sL: lam/lam_c")
+        report.value(f"ves.nc_dp_{ratio}", res.dp_plus_R0, reference=lub.dp_plus_R0,
+                     tol="0 < gap, shrinking, < 10 %", source="lubrication solver, same Ca_B")
         assert res.V_over_U == pytest.approx(lub.V_over_U, rel=1e-3)
         assert res.ell / critical_length(0.9) == pytest.approx(ratio, rel=5e-3)
         assert 0 < res.film_min < 1 - ratio
@@ -343,7 +379,7 @@ def test_near_critical_discrepancy_with_lubrication_shrinks():
 
 
 @pytest.mark.slow          # ~6 min (three 64-80-mode minima)
-def test_mode_convergence_is_geometric_at_nu_0p6_lam_1p94():
+def test_mode_convergence_is_geometric_at_nu_0p6_lam_1p94(report):
     """(0.6, 1.94), lam/lam_c = 0.979, Ca_B = 50: with the density built once on the
     default 64-mode BEM shape (stored) the levels 64, 72, 80 converge geometrically. Measured
     (docs/validation.md): V/U 1.0209209, 1.0208119, 1.0207880 (ratio of successive
@@ -358,6 +394,16 @@ def test_mode_convergence_is_geometric_at_nu_0p6_lam_1p94():
                          ca_b=data["ca_b"], success=False, message="stored default shape",
                          modes=np.array(data["modes"]), density=np.array(data["density"]))
     rows = mode_convergence(seed, (64, 72, 80))
+    for r in rows:
+        for key in ("V_over_U", "dp_plus_R0", "tension_max", "residual"):
+            report.value(f"ves.modes_{key}_{r['modes']}", r[key], kind="regression",
+                         source="mode_convergence on the stored 64-mode shape")
+    for key in ("V_over_U", "tension_max"):
+        report.value(f"ves.modes_ratio_{key}", rows[-1][f"ratio_{key}"], reference=0.5,
+                     tol="< 0.5", source="geometric convergence")
+    report.value("ves.modes_dp_settled",
+                 abs(rows[-1]["dp_plus_R0"] / rows[1]["dp_plus_R0"] - 1), reference=0.0,
+                 tol="1e-4 rel", source="72 vs 80 modes")
     assert all(r["success"] for r in rows), [r["message"] for r in rows]
     last = rows[-1]
     assert last["ratio_V_over_U"] < 0.5 and last["ratio_tension_max"] < 0.5, last

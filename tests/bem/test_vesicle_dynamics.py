@@ -143,7 +143,7 @@ def steady():
     return res
 
 
-def test_integrating_from_the_newton_state_stays_steady(steady):
+def test_integrating_from_the_newton_state_stays_steady(steady, report):
     """Five linearised backward Euler steps of 0.1 R/U (4x the explicit limit) from the Newton
     steady state (~4 s). Independent reference: the Newton solution, whose tension and V come
     from u = V e_x in least squares, not from inextensibility and eq. Vel. Measured:
@@ -156,6 +156,10 @@ def test_integrating_from_the_newton_state_stays_steady(steady):
     modes, state, info = relax_vesicle(op, m0, 0.5, dt=0.1)
     assert not info["failure"] and info["steps"] == 5 and info["rejected"] == 0
     peaks = np.array([h[1] for h in info["history"]])
+    report.value("dyn.steady16_peak", float(np.max(peaks)), reference=newton["residual"],
+                 tol="1.2 × the Newton residual, and 1.5e-5", source="the Newton steady state")
+    report.value("dyn.steady16_V", abs(state.V / steady.V_over_U - 1.0), reference=0.0,
+                 tol="1e-6 rel", source="the Newton steady state")
     assert np.all(peaks <= 1.2 * newton["residual"]), (peaks, newton["residual"])
     assert np.all(peaks <= 1.5e-5)
     assert np.all(np.abs(np.array([h[2] for h in info["history"]]) / newton["V"] - 1) < 1e-6)
@@ -200,7 +204,7 @@ def test_bad_input_is_rejected_before_any_work():
 
 # ------------------------------------------------------------------ slow validation
 @pytest.mark.slow          # ~25-50 s: the 16/24 pair (~12 s of Newton) and a 24-mode Jacobian
-def test_stays_steady_below_1e_5_at_24_modes():
+def test_stays_steady_below_1e_5_at_24_modes(report):
     """Project acceptance: integration from the Newton steady state stays steady with
     max|u.n - V n_x|/U <= 1e-5. Measured at 24 modes (8 panels): Newton residual 5.7e-8;
     max|u.n - V n_x| 3.3e-8 at t = 0 and 3.6e-8 after five steps of 0.1 R/U; V/U 1.88137867
@@ -212,6 +216,10 @@ def test_stays_steady_below_1e_5_at_24_modes():
     modes, state, info = relax_vesicle(op, m0, 0.5, dt=0.1)
     peaks = np.array([h[1] for h in info["history"]])
     assert not info["failure"] and info["steps"] == 5
+    report.value("dyn.steady24_peak", float(np.max(peaks)), reference=0.0,
+                 tol="1e-7 (acceptance 1e-5)", source="the Newton steady state, 24 modes")
+    report.value("dyn.steady24_V", abs(state.V / res.V_over_U - 1.0), reference=0.0,
+                 tol="1e-8 rel", source="the Newton steady state, 24 modes")
     assert np.all(peaks <= 1e-5)                      # the acceptance bound
     assert np.all(peaks <= 1e-7)                      # what this resolution reaches
     assert abs(state.V / res.V_over_U - 1.0) < 1e-8
@@ -219,7 +227,7 @@ def test_stays_steady_below_1e_5_at_24_modes():
 
 
 @pytest.mark.slow          # ~15 s (plus the shared steady solve)
-def test_long_relaxation_reaches_the_newton_state(steady):
+def test_long_relaxation_reaches_the_newton_state(steady, report):
     """Relaxed from the spheroid down to the truncation floor (max|u.n - V n_x| < 1.2e-5):
     measured at t = 13.7 R/U after 33 steps, V/U 1.8813809 vs Newton 1.8813787 (1.2e-6),
     modes within 2.1e-5 of Newton's."""
@@ -227,12 +235,14 @@ def test_long_relaxation_reaches_the_newton_state(steady):
     op = VesicleOperator(NU, LAM, CA_B, DropDiscretisation(n_modes=16, n_panels=8), seed)
     modes, state, info = relax_vesicle(op, seed.modes, 40.0, dt=0.5, tol=1.2e-5)
     assert not info["failure"] and info["max_un"] < 1.2e-5
+    report.value("dyn.relax_V", abs(state.V / steady.V_over_U - 1.0), reference=0.0,
+                 tol="3e-6 rel", source="the Newton steady state")
     assert abs(state.V / steady.V_over_U - 1.0) < 3e-6
     assert np.max(np.abs(modes - op.curve(steady.modes).modes)) < 1e-4
 
 
 @pytest.mark.slow          # ~50 s
-def test_explicit_stability_limit_is_set_by_the_fastest_membrane_mode(steady):
+def test_explicit_stability_limit_is_set_by_the_fastest_membrane_mode(steady, report):
     """Stiffest eigenvalue of the mode-rate Jacobian at the steady state vs the flat-membrane
     rate (kappa q^3 + gamma q)/(4 eta) of the highest mode, q = N pi/S (Brochard & Lennon
     1975): measured -78.9 vs 76.4 (16 modes; -245 vs 237 at 24), limit 2/78.9 = 0.0254 R/U.
@@ -249,6 +259,9 @@ def test_explicit_stability_limit_is_set_by_the_fastest_membrane_mode(steady):
     lam_max = float(-np.min(ev.real))
     q = m0.size * math.pi / base.curve.length
     gmax = np.max(np.abs(tension_profile(base.curve, base.g, np.linspace(0, 1, 201))[0]))
+    report.value("dyn.stiffest_rate", lam_max,
+                 reference=relaxation_rate_brochard_lennon_1975(q, op.kappa, gmax), tol="10 %",
+                 source="Brochard & Lennon 1975: (kappa q^3 + gamma q)/(4 eta)")
     assert lam_max == pytest.approx(relaxation_rate_brochard_lennon_1975(q, op.kappa, gmax),
                                     rel=0.1)
     limit = 2.0 / lam_max

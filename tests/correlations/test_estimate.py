@@ -117,7 +117,7 @@ def test_reference_lam_c_reproduces_the_printed_values():
 # Red blood cell defaults: 90 fL, 135 µm², 4 µm tube, 1 mm/s, 1.2 mPa s, 2e-19 J.
 # ------------------------------------------------------------------------------------------
 
-def test_rbc_default_geometry():
+def test_rbc_default_geometry(report):
     e = estimate()
     nu = 6.0 * math.sqrt(math.pi) * 90.0 * 135.0 ** -1.5
     R0 = (3.0 * 90.0 / (4.0 * math.pi)) ** (1.0 / 3.0)
@@ -132,6 +132,10 @@ def test_rbc_default_geometry():
     assert e["d_c_um"] == pytest.approx(2.0 * R0 / lam_c, rel=1e-12)
     assert e["L_c_um"] == pytest.approx(ref_ell_c(nu) * R0 / lam_c, rel=1e-12)   # ell_c d_c / 2
     assert e["passes"] is True
+    by_hand = "the formulas written in this test"
+    report.value("est.rbc_lam", e["lam"], reference=lam, tol="1e-12 rel", source=by_hand)
+    report.value("est.rbc_delta", e["delta"], reference=1.0 - lam / lam_c, tol="1e-12 rel",
+                 source=by_hand)
     # Printed checks (docstring / physics-notes §2): nu ~ 0.61, lam ~ 1.39, d_c ~ 2.85 µm.
     assert (round(nu, 2), round(lam, 2), round(2 * R0 / lam_c, 2)) == (0.61, 1.39, 2.85)
 
@@ -151,9 +155,11 @@ def test_rbc_default_without_the_map_is_intermediate_and_reports_no_speed():
     assert any("extrapolate" in n for n in e.notes)
 
 
-def test_rbc_default_bending_capillary_number():
+def test_rbc_default_bending_capillary_number(report):
     R0_m = (3.0 * 90.0 / (4.0 * math.pi)) ** (1.0 / 3.0) * 1e-6
-    assert estimate()["ca_b"] == _rel(ETA_DEFAULT * U_DEFAULT * R0_m**2 / KAPPA_DEFAULT)
+    ref = ETA_DEFAULT * U_DEFAULT * R0_m**2 / KAPPA_DEFAULT
+    assert report.value("est.rbc_ca_b", estimate()["ca_b"], reference=ref, tol="1e-12 rel",
+                        source="eta U R0^2/kappa") == _rel(ref)
 
 
 def test_bending_capillary_number_scales_with_the_inputs():
@@ -168,7 +174,7 @@ def test_bending_capillary_number_scales_with_the_inputs():
 # ------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("velocity_mm_s, viscosity_mpas", [(1.0, 1.2), (2.5, 0.8)])
-def test_near_critical_rbc_in_a_3_um_tube(velocity_mm_s, viscosity_mpas):
+def test_near_critical_rbc_in_a_3_um_tube(velocity_mm_s, viscosity_mpas, report):
     e = estimate(diameter_um=3.0, velocity_mm_s=velocity_mm_s, plasma_viscosity_mpas=viscosity_mpas,
                  **NO_MAP)
     nu, R0 = ref_nu(90.0, 135.0), ref_R0(90.0)
@@ -200,6 +206,13 @@ def test_near_critical_rbc_in_a_3_um_tube(velocity_mm_s, viscosity_mpas):
     assert e["tension_front_mN_m"] == _rel((delta / 2.0) ** -1.5 * eta * V * 1e3)
     for key in ("V_mm_s", "dp_plus_Pa", "film_nm", "length_um", "tension_front_mN_m"):
         assert e.quantities[key].valid is True, key
+    if (velocity_mm_s, viscosity_mpas) == (1.0, 1.2):      # the defaults: recorded for the report
+        by_hand = "the closed forms written in this test"
+        for key, ref in (("delta", delta), ("V_over_U", V_over_U), ("dp_plus_R0", dp),
+                         ("film_nm", delta * R_m * 1e9), ("length_um", ell * R_m * 1e6),
+                         ("tension_front_mN_m", (delta / 2.0) ** -1.5 * eta * V * 1e3)):
+            report.value(f"est.rbc3_{key}", e[key], reference=ref, tol="1e-12 rel",
+                         source=by_hand)
 
 
 @pytest.mark.parametrize("nu, delta", [(0.9, 0.05), (0.7, 0.099), (0.6, 0.01), (0.95, 0.08)])
@@ -280,10 +293,12 @@ def test_tube_hematocrit_single_file_near_critical_dimensionless():
     assert e.quantities["eta_rel"].method == "single_file_chen2020"
 
 
-def test_tube_hematocrit_single_file_rbc_3_um():
+def test_tube_hematocrit_single_file_rbc_3_um(report):
     e = estimate(diameter_um=3.0, hematocrit=0.3, **NO_MAP)
     nu, lam = ref_nu(90.0, 135.0), 2.0 * ref_R0(90.0) / 3.0
     dp = ref_film_scaling(nu, lam)
+    report.value("est.rbc3_eta_rel", e["eta_rel"], reference=ref_eta_single_file(lam, dp, 0.3),
+                 tol="1e-11 rel", source="Chen et al. 2020 single-file law, by hand")
     assert e["discharge_hematocrit"] == _rel(0.3 * ref_speed_asmyp1(nu, lam))
     assert e["eta_rel"] == pytest.approx(ref_eta_single_file(lam, dp, 0.3), rel=1e-11)
     assert e.quantities["eta_rel"].method == "single_file_chen2020"

@@ -224,7 +224,7 @@ MAP_KEYS = ("V_over_U", "V_mm_s", "dp_plus_R0", "dp_plus_Pa", "film", "film_nm",
 
 
 @shipped
-def test_the_default_estimate_answers_from_the_shipped_map(cli):
+def test_the_default_estimate_answers_from_the_shipped_map(cli, report):
     """make run: the human RBC in a 4 um capillary (nu = 0.61, lam/lam_c = 0.71, Ca_B = 46)
     gets V/U, V, dp+, film, L and both tensions from the map, each with an error bar; the
     single-file viscosity then has its dp+."""
@@ -235,6 +235,8 @@ def test_the_default_estimate_answers_from_the_shipped_map(cli):
         q = e.quantities[key]
         assert q.method.startswith("map (") and q.valid and q.error is not None, (key, q)
         assert 0.0 <= q.error < abs(q.value), (key, q)
+        report.value(f"est.map_{key}", q.value, reference=q.error, tol="error bar < |value|",
+                     kind="regression", source="the shipped solution map (our BEM values)")
     assert e.quantities["eta_rel"].method == "single_file_chen2020"
     code, table, _ = cli("estimate")
     for label in ("speed V/U", "cell speed V", "extra pressure drop dp+", "film thickness h",

@@ -33,23 +33,30 @@ def _quiet(f, *args, **kw):
 
 
 # --------------------------------------------------------------------------- shape
-def test_transition_confinement_of_red_cells_is_about_1_8():
+def test_transition_confinement_of_red_cells_is_about_1_8(report):
     """Chen et al.: lambda_T(nu = 0.6) ~= 1.8 (printed to 2 digits)."""
-    assert shape.transition_confinement_chen2020(0.6) == pytest.approx(1.8, abs=0.02)
+    assert report.value("corr.lam_T_0.6", shape.transition_confinement_chen2020(0.6),
+                        reference=1.8, tol="±0.02", source="Chen et al. 2020"
+                        ) == pytest.approx(1.8, abs=0.02)
 
 
-def test_the_two_vesicles_of_the_transition_figure():
+def test_the_two_vesicles_of_the_transition_figure(report):
     """Fig. transition: (0.95, 0.8, Ca_B = 5) bullet, (0.83, 0.67, Ca_B = 15) parachute."""
+    source = "Chen et al. 2020, caption of the transition figure"
     with pytest.warns(OutOfRangeWarning, match="ca_b"):   # Ca_B = 5 is below the diagram's 10
-        assert shape.shape_class_chen2020(0.95, 0.8, ca_b=5) == "bullet"
+        assert report.value("corr.class_0.95_0.8", shape.shape_class_chen2020(0.95, 0.8, ca_b=5),
+                            reference="bullet", tol="equal", source=source) == "bullet"
     with _NoWarnings():
-        assert shape.shape_class_chen2020(0.83, 0.67, ca_b=15) == "parachute"
+        assert report.value("corr.class_0.83_0.67",
+                            shape.shape_class_chen2020(0.83, 0.67, ca_b=15),
+                            reference="parachute", tol="equal", source=source) == "parachute"
 
 
-def test_gap_at_the_red_cell_transition():
+def test_gap_at_the_red_cell_transition(report):
     """Chen et al.: at the nu = 0.6 transition the gap is ~7 % of R; eq. sfilm2 gives 8.4 %."""
     lam_T = shape.transition_confinement_chen2020(0.6)
-    delta = film.film_thickness_chen2020(0.6, lam_T)
+    delta = report.value("corr.film_at_lam_T_0.6", film.film_thickness_chen2020(0.6, lam_T),
+                         reference=0.07, tol="±0.02", source="Chen et al. 2020 (BEM, ≈ 7 %)")
     assert delta == pytest.approx(0.0845, abs=5e-4)
     assert abs(delta - 0.07) < 0.02   # consistent with "~7 %" only within the O(delta^2) slack
 
@@ -287,20 +294,27 @@ def test_film_thickness_warns_for_wide_gaps(nu, f):
 
 
 # --------------------------------------------------------------------------- pressure
-def test_speed_fit_at_the_ends_of_its_range():
+def test_speed_fit_at_the_ends_of_its_range(report):
     """eq. dpa_v_fit at U/V = 0.6 and 0.995: 3e-6 e^12 = 0.48826, 3e-6 e^19.9 = 1316.99."""
+    source = "3e-6 exp(...) of Chen et al. eq. dpa_v_fit evaluated by hand"
     with _NoWarnings():
-        assert pressure.dp_plus_speed_fit_chen2020(1 / 0.6) == pytest.approx(0.488264, rel=1e-5)
-        assert pressure.dp_plus_speed_fit_chen2020(1 / 0.995) == pytest.approx(1316.987, rel=1e-5)
+        assert report.value("corr.dpa_v_fit_0.6", pressure.dp_plus_speed_fit_chen2020(1 / 0.6),
+                            reference=0.488264, tol="1e-5 rel", source=source
+                            ) == pytest.approx(0.488264, rel=1e-5)
+        assert report.value("corr.dpa_v_fit_0.995",
+                            pressure.dp_plus_speed_fit_chen2020(1 / 0.995), reference=1316.987,
+                            tol="1e-5 rel", source=source) == pytest.approx(1316.987, rel=1e-5)
 
 
-def test_film_correlation_against_the_near_critical_leading_term():
+def test_film_correlation_against_the_near_critical_leading_term(report):
     """(3/2) lam ell/delta vs eq. asmyp2 at ell = ell_c: leading-term ratio (4/3)(1 - 2/ell_c)."""
     for nu in (0.6, 0.8, 0.9):
         lam_c, ell_c = critical_confinement(nu), critical_length(nu)
         delta = 1e-8
         lam = lam_c * (1 - delta)
         ratio = dp_plus_near_critical(nu, lam) / pressure.dp_plus_film_chen2020(lam, ell_c, delta)
+        report.value(f"corr.film_vs_asmyp2_{nu}", ratio, reference=4 / 3 * (1 - 2 / ell_c),
+                     tol="1e-3 rel", source="(4/3)(1 - 2/ell_c)")
         assert ratio == pytest.approx(4 / 3 * (1 - 2 / ell_c), rel=1e-3)
 
 

@@ -111,6 +111,22 @@ def test_in_vivo_laws_match_printed_formulas(D):
             assert_rel(relative_viscosity(D, HD, law=law), ref(D, HD))
 
 
+def test_largest_deviation_from_the_printed_formulas_and_sample_values(report):
+    """All three laws on the grid at once (the largest relative deviation, reported), and the
+    sample values of the report (H_D = 0.45, d = 4, 6, 8, 10 µm) against the printed formulas."""
+    refs = {"pries1992": ref_vitro, "pries1994": ref_vivo1994, "pries2005": ref_vivo2005}
+    worst = max(abs(relative_viscosity(D, HD, law=law) / ref(D, HD) - 1)
+                for law, ref in refs.items() for D in DIAMETERS for HD in HEMATOCRITS)
+    assert report.value("visc.printed_worst", worst, reference=0.0, tol=RTOL,
+                        source="printed formulas, plain Python") <= RTOL
+    for law, ref in refs.items():
+        for D in (4.0, 6.0, 8.0, 10.0):
+            eta = report.value(f"visc.sample_{law}_{D:g}", relative_viscosity(D, 0.45, law=law),
+                               reference=ref(D, 0.45), tol=f"{RTOL:g} rel",
+                               source="printed formula")
+            assert_rel(eta, ref(D, 0.45))
+
+
 @pytest.mark.parametrize("constants", sorted(FAHRAEUS_CONSTANTS))
 def test_fahraeus_matches_printed_formulas(constants):
     a, b = FAHRAEUS_CONSTANTS[constants]
@@ -122,12 +138,14 @@ def test_fahraeus_matches_printed_formulas(constants):
                        ref_discharge_hematocrit(D, H, a, b))
 
 
-def test_single_file_matches_printed_formula_and_chen_coefficient():
+def test_single_file_matches_printed_formula_and_chen_coefficient(report):
     for dp, d, R0, HT in [(1.0, 4.0, 2.8, 0.3), (250.0, 3.0, 2.78, 0.45), (1e-3, 7.5, 3.0, 0.1)]:
         assert_rel(viscosity_single_file_chen2020(dp, d, R0, HT),
                    1 + 3 / 32 * (d / 2 / R0)**4 * dp * HT)
     # Chen et al. 2020 §Visco prints K_T = 9.53e-5 d^4 (Δp+R0/ηU) for R0 = 2.8 µm, d in µm.
     coefficient = viscosity_single_file_chen2020(1.0, 1.0, 2.8, 0.5) / 0.5 - 1 / 0.5
+    report.value("visc.chen_coefficient", coefficient, reference=9.53e-5, tol="3 digits",
+                 source="Chen et al. 2020 §Visco: (3/32)/5.6^4")
     assert f"{coefficient:.3g}" == "9.53e-05"
 
 
@@ -144,23 +162,32 @@ def test_single_file_warns_above_8_um_and_rejects_negative_pressure_drop():
 # Limits and shape of the in vitro law
 # ------------------------------------------------------------------------------------------
 
-def test_in_vitro_limits_at_zero_and_reference_hematocrit():
+def test_in_vitro_limits_at_zero_and_reference_hematocrit(report):
     d = np.geomspace(3.3, 1978.0, 2001)
     assert np.all(viscosity_vitro_pries1992(d, 0.0) == 1.0)
+    report.value("visc.limit_045", np.max(np.abs(viscosity_vitro_pries1992(d, 0.45)
+                                                 / eta_045_vitro_pries1992(d) - 1)),
+                 reference=0.0, tol="1e-15 rel", source="Pries 1992 definition")
     np.testing.assert_allclose(viscosity_vitro_pries1992(d, 0.45), eta_045_vitro_pries1992(d),
                                rtol=1e-15, atol=0)
 
 
-def test_in_vitro_tends_to_3_2_for_wide_tubes():
+def test_in_vitro_tends_to_3_2_for_wide_tubes(report):
     with pytest.warns(OutOfRangeWarning, match="diameter_um"):
-        eta = viscosity_vitro_pries1992(1e4, 0.45)
+        eta = report.value("visc.wide_tube", viscosity_vitro_pries1992(1e4, 0.45), reference=3.2,
+                           tol="±1e-3", source="Pries 1992")
     assert abs(eta - 3.2) < 1e-3
 
 
-def test_in_vitro_minimum_lies_between_5_and_7_um():
+def test_in_vitro_minimum_lies_between_5_and_7_um(report):
     """Pries & Secomb 2003 review: the in vitro viscosity minimum lies at D = 5-7 µm."""
     res = minimize_scalar(lambda d: viscosity_vitro_pries1992(d, 0.45), bounds=(3.3, 30.0),
                           method="bounded", options={"xatol": 1e-6})
+    report.value("visc.minimum_d", res.x, reference="5–7 µm", tol="inside (5, 7)",
+                 source="Pries & Secomb 2003")
+    eta_min = report.value("visc.minimum_eta", res.fun, reference=ref_vitro(res.x, 0.45),
+                           tol=f"{RTOL:g} rel", source="printed formula at the minimum")
+    assert_rel(eta_min, ref_vitro(res.x, 0.45))
     assert 5.0 < res.x < 7.0, res
 
 
@@ -168,12 +195,13 @@ def _root_of_C():
     return brentq(lambda d: shape_exponent_pries1992(d), 7.0, 9.0, xtol=1e-14)
 
 
-def test_shape_exponent_zero_is_near_8_05_um():
-    assert abs(_root_of_C() - 8.05) < 0.01
+def test_shape_exponent_zero_is_near_8_05_um(report):
+    assert abs(report.value("visc.d_star", _root_of_C(), reference=8.05, tol="±0.01",
+                            source="brentq on C(D)") - 8.05) < 0.01
 
 
 @pytest.mark.parametrize("law", ["pries1992", "pries1994"])
-def test_exact_continuity_across_zero_of_shape_exponent(law):
+def test_exact_continuity_across_zero_of_shape_exponent(law, report):
     """At D*, D* +- 1e-9, D* +- 1e-6 the value agrees with 50-digit arithmetic to ~1e-15."""
     mp = pytest.importorskip("mpmath")
     mp.mp.dps = 50
@@ -196,6 +224,7 @@ def test_exact_continuity_across_zero_of_shape_exponent(law):
 
     d_star = _root_of_C()
     offsets = [0.0, 1e-9, -1e-9, 1e-6, -1e-6]
+    worst = 0.0
     for HD in [0.0, 0.1, 0.3, 0.45, 0.6, 0.8, 0.95, 0.999]:
         values = []
         for off in offsets:
@@ -204,10 +233,13 @@ def test_exact_continuity_across_zero_of_shape_exponent(law):
                 got = relative_viscosity(d_star + off, HD, law=law)
             want = high_precision(d_star + off, HD)
             assert abs(got - float(want)) <= 4e-15 * float(want), (HD, off, got, want)
+            worst = max(worst, abs(got - float(want)) / float(want))
             values.append(got)
         # no jump at D*: the steps D* - 1e-9 -> D* -> D* + 1e-9 are equal up to the curvature
         # term (|eta''| 1e-18, negligible) and round-off
         assert abs((values[1] - values[0]) - (values[0] - values[2])) <= 4e-15 * values[0], values
+    report.value(f"visc.continuity_{law}", worst, reference=0.0, tol="4e-15 rel",
+                 source="50-digit mpmath")
     # the same points as one array: no RuntimeWarning (0/0) leaks, result finite
     eta = relative_viscosity(d_star + np.array(offsets)[:, None], np.array([0.1, 0.9]), law=law)
     assert eta.shape == (5, 2) and np.all(np.isfinite(eta))
@@ -218,11 +250,13 @@ def test_exact_continuity_across_zero_of_shape_exponent(law):
 # ------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("HD", [0.4, 0.45])
-def test_in_vivo_over_in_vitro_factor_at_10_um(HD):
+def test_in_vivo_over_in_vitro_factor_at_10_um(HD, report):
     """Pries et al. 1994, Circ. Res. 75:904, abstract: "flow resistance in 10-µm microvessels at
     normal hematocrit is found to exceed that of a corresponding glass tube by a factor of ≈4".
     The paper rounds to one figure; the fitted laws give 3.95 (H_D = 0.4) and 4.42 (0.45)."""
-    factor = viscosity_vivo_pries1994(10.0, HD) / viscosity_vitro_pries1992(10.0, HD)
+    factor = report.value(f"visc.vivo_over_vitro_{HD}",
+                          viscosity_vivo_pries1994(10.0, HD) / viscosity_vitro_pries1992(10.0, HD),
+                          reference=4.0, tol="±0.5", source="Pries et al. 1994 abstract")
     assert abs(factor - 4.0) < 0.5, factor
 
 
@@ -265,8 +299,9 @@ def _x_equals_one_diameter(constants):
 
 
 @pytest.mark.parametrize("constants", sorted(FAHRAEUS_CONSTANTS))
-def test_fahraeus_round_trip_including_x_equal_one(constants):
-    d_one = _x_equals_one_diameter(constants)
+def test_fahraeus_round_trip_including_x_equal_one(constants, report):
+    d_one = report.value(f"visc.x_one_{constants}", _x_equals_one_diameter(constants),
+                         reference="2.6–3.1 µm", tol="inside (2.5, 3.1)", source="physics notes")
     assert 2.5 < d_one < 3.1   # physics notes: x = 1 at D ~ 2.6-3.1 µm
     # x = 1 at d_one (the lower end of the domain: below it H_T > H_D), and x == 1.0 exactly in
     # floating point for D >= ~1e4 (both outside the fitted range, hence the warnings); the grid
@@ -280,6 +315,10 @@ def test_fahraeus_round_trip_including_x_equal_one(constants):
         back = discharge_hematocrit_fahraeus(d, ht, constants)
     np.testing.assert_allclose(back, np.broadcast_to(hd, back.shape), rtol=1e-12, atol=0)
     assert np.all(np.isfinite(back))
+    nonzero = hd > 0
+    report.value(f"visc.round_trip_{constants}",
+                 np.max(np.abs(back[:, nonzero] / hd[nonzero] - 1)), reference=0.0,
+                 tol="1e-12 rel", source="identity")
 
 
 @pytest.mark.parametrize("constants", sorted(FAHRAEUS_CONSTANTS))

@@ -81,8 +81,20 @@ def test_drop_is_between_the_unbounded_fluid_and_the_rigid_sphere():
 
 # --------------------------------------------------------------------------- near critical
 @pytest.mark.parametrize("nu, slope", [(0.9, 1.07), (0.6, 1.02)])
-def test_slope_of_eq_asmyp1_matches_the_physics_notes(nu, slope):
-    assert a.speed_slope_near_critical(nu) == pytest.approx(slope, abs=5e-3)
+def test_slope_of_eq_asmyp1_matches_the_physics_notes(nu, slope, report):
+    assert report.value(f"asym.slope_notes_{nu}", a.speed_slope_near_critical(nu),
+                        reference=slope, tol="±5e-3", source="physics-notes"
+                        ) == pytest.approx(slope, abs=5e-3)
+
+
+@pytest.mark.parametrize("nu", [0.6, 0.7, 0.8, 0.9, 0.98, 1.0])
+def test_slope_of_eq_asmyp1_is_its_closed_form(nu, report):
+    """d(V/U)/d delta = (4/3)(3X - 2)/(4X - 3), X = lam_c^2 nu^(-2/3) (Chen et al. eq. asmyp1)."""
+    X = critical_confinement(nu) ** 2 * nu ** (-2 / 3)
+    closed = 4 / 3 * (3 * X - 2) / (4 * X - 3)
+    assert report.value(f"asym.slope_{nu}", a.speed_slope_near_critical(nu), reference=closed,
+                        tol="1e-12 rel", source="Chen et al. 2020 eq. asmyp1"
+                        ) == pytest.approx(closed, rel=1e-12)
 
 
 @given(nu=st.floats(0.3, 1.0), frac=st.floats(0.9001, 0.9999))
@@ -169,7 +181,7 @@ def _rigid_sphere_near_contact(eps):
     return 1 + s, dp_plus
 
 
-def test_nu_1_limits_are_the_rigid_sphere_near_contact():
+def test_nu_1_limits_are_the_rigid_sphere_near_contact(report):
     """At nu = 1: lam_c = 1, X = 1, slope 4/3 and dp+ = 4 sqrt(2) pi lam delta^(-1/2).
 
     The thin-film model of a rigid sphere with gap eps R gives V/U -> 1 + 4 eps/3 and
@@ -183,7 +195,11 @@ def test_nu_1_limits_are_the_rigid_sphere_near_contact():
     law_speed = a.speed_near_critical(1.0, lam)
     law_dp_R = a.dp_plus_near_critical(1.0, lam) / lam   # dp+ R/(eta U)
     assert np.allclose((model[:, 0] - 1) / eps, (law_speed - 1) / eps, rtol=5e-4)
+    report.value("asym.nu1_slope_error", abs((model[-1, 0] - 1) / (law_speed[-1] - 1) - 1),
+                 reference=0.0, tol="5e-4 rel", source="thin-film rigid sphere, eps = 1e-5")
     err = np.abs(model[:, 1] / law_dp_R - 1)
+    report.value("asym.nu1_dp_error", err[-1], reference=0.0, tol=0.015,
+                 source="thin-film rigid sphere, eps = 1e-5")
     order = np.log(err[:-1] / err[1:]) / np.log(eps[:-1] / eps[1:])
     assert err[-1] < 0.015, err
     assert np.all(np.abs(order - 0.5) < 0.1), order   # the O(1) remainder of eq. asmyp2

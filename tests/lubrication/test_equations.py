@@ -67,26 +67,34 @@ def sympy_series():
     (0.9, 0.05, -305.2106, 4.997226, -24.49750),
     (0.5, 0.1, -22.79586, 3.748449, None),
 ])
-def test_spot_values_of_the_physics_notes(r, Q, G, e_m, e_w):
-    assert eq.pressure_gradient(r, Q) == pytest.approx(G, abs=1e-4)
-    assert eq.membrane_shear_rate(r, Q) == pytest.approx(e_m, abs=1e-6)
+def test_spot_values_of_the_physics_notes(r, Q, G, e_m, e_w, report):
+    notes = "physics-notes"
+    assert report.value(f"lub.spot_G_{r}", eq.pressure_gradient(r, Q), reference=G, tol="±1e-4",
+                        source=notes) == pytest.approx(G, abs=1e-4)
+    assert report.value(f"lub.spot_e_m_{r}", eq.membrane_shear_rate(r, Q), reference=e_m,
+                        tol="±1e-6", source=notes) == pytest.approx(e_m, abs=1e-6)
     if e_w is not None:
-        assert eq.wall_shear_rate(r, Q) == pytest.approx(e_w, abs=1e-5)
+        assert report.value(f"lub.spot_e_w_{r}", eq.wall_shear_rate(r, Q), reference=e_w,
+                            tol="±1e-5", source=notes) == pytest.approx(e_w, abs=1e-5)
 
 
-def test_series_spot_value_r_half_q_tenth():
-    assert eq.membrane_shear_rate_series(0.5, 0.1) == pytest.approx(3.729401, abs=1e-6)
+def test_series_spot_value_r_half_q_tenth(report):
+    assert report.value("lub.series_e_m_0.5", eq.membrane_shear_rate_series(0.5, 0.1),
+                        reference=3.729401, tol="±1e-6", source="physics-notes d^4 series"
+                        ) == pytest.approx(3.729401, abs=1e-6)
 
 
 # --------------------------------------------------------------------------- independent flow
 @pytest.mark.parametrize("r", [0.01, 0.2, 0.5, 0.9, 0.98, 0.995, 0.999])
 @pytest.mark.parametrize("Q", [1e-3, 0.05, 0.3])
-def test_flux_by_quadrature_is_minus_pi_q(r, Q):
+def test_flux_by_quadrature_is_minus_pi_q(r, Q, report):
     """Flux through the gap, 2 pi int_r^1 u rho drho = -pi Q (r < 1 - SERIES_GAP: exact form;
     r > 1 - SERIES_GAP: series)."""
     u, _ = _independent_flow(r, Q)
     flux = 2 * math.pi * quad(lambda rho: u(rho) * rho, r, 1.0, epsabs=0, epsrel=1e-11,
                               limit=200)[0]
+    report.value(f"lub.flux_{r}_{Q}", abs(flux / (-math.pi * Q) - 1), reference=0.0,
+                 tol="1e-9 rel", source="adaptive quadrature of the gap velocity")
     assert flux == pytest.approx(-math.pi * Q, rel=1e-9, abs=1e-9 * (1 - r))
 
 
@@ -157,7 +165,7 @@ def test_switch_to_the_series_is_continuous():
             assert s(d, Q) == pytest.approx(f(1 - d * (1 + 1e-12), Q), rel=1e-10)
 
 
-def test_accuracy_against_40_digit_arithmetic():
+def test_accuracy_against_40_digit_arithmetic(report):
     """Largest error over 1e-7 <= d < 1, relative to the size of the leading terms (the
     functions cross zero, so plain relative errors are meaningless there): <= 1e-11."""
     ds = np.concatenate([np.geomspace(1e-7, 0.5, 120), 1 - np.geomspace(1e-6, 0.5, 30)])
@@ -174,20 +182,26 @@ def test_accuracy_against_40_digit_arithmetic():
                       3 * Q / d**2 + 4 / d + 1 / (r * abs(math.log(r))),
                       3 * Q / d**2 + 4 / d + 1 / abs(math.log(r)))
             worst = max(worst, max(abs(g - x) / s for g, x, s in zip(got, ref, scales)))
-    assert worst < 1e-11, worst
+    assert report.value("lub.mpmath_worst", worst, reference=0.0, tol=1e-11,
+                        source="40-digit mpmath") < 1e-11, worst
 
 
 # --------------------------------------------------------------------------- rigid cylinder
 @pytest.mark.parametrize("k", [0.3, 0.6, 0.9, 0.99, 0.999])
-def test_free_rigid_long_cylinder(k):
+def test_free_rigid_long_cylinder(k, report):
     """A long rigid cylinder of radius k with zero net force: V/U = 2/(1 + k^2) exactly, and
     the extra pressure drop per length dp+ R^2/(eta V L) = 4 k^4/(1 - k^2) (physics notes §3)."""
     def net_force(Q):   # per unit length: pressure on the cross-section plus shear on the side
         return (-math.pi * k * k * eq.pressure_gradient(k, Q)
                 + 2 * math.pi * k * eq.membrane_shear_rate(k, Q))
     Q = brentq(net_force, -0.5, 0.99, xtol=1e-15, rtol=1e-15)
+    closed = "physics notes §3, closed form"
+    report.value(f"lub.cylinder_V_{k}", abs((1 / (1 - Q)) / (2 / (1 + k * k)) - 1),
+                 reference=0.0, tol="1e-11 rel", source=closed)
     assert 1 / (1 - Q) == pytest.approx(2 / (1 + k * k), rel=1e-11)
     dp_plus_per_length = -eq.pressure_gradient(k, Q) - 8 * (1 - Q)
+    report.value(f"lub.cylinder_dp_{k}", abs(dp_plus_per_length / (4 * k**4 / (1 - k * k)) - 1),
+                 reference=0.0, tol="1e-9 rel", source=closed)
     assert dp_plus_per_length == pytest.approx(4 * k**4 / (1 - k * k), rel=1e-9)
 
 

@@ -17,16 +17,36 @@ def cubic(lam_c, nu):
     return 2 * lam_c**3 - 3 * nu ** (-2 / 3) * lam_c**2 + 1
 
 
-def test_lam_c_is_a_root_of_the_cubic_to_machine_precision():
+def largest_root(nu):
+    """The largest real root of the cubic of Chen et al. eq. critic, by ``numpy.roots``."""
+    roots = np.roots([2, -3 * nu ** (-2 / 3), 0, 1])
+    return max(r.real for r in roots if abs(r.imag) < 1e-9)
+
+
+def test_lam_c_is_a_root_of_the_cubic_to_machine_precision(report):
     nu = np.linspace(0.3, 1.0, 20001)
-    assert np.max(np.abs(cubic(g.critical_confinement(nu), nu))) <= 1e-12
+    residual = report.value("geometry.cubic_residual",
+                            np.max(np.abs(cubic(g.critical_confinement(nu), nu))),
+                            reference=0.0, tol=1e-12, source="the cubic, nu in [0.3, 1]")
+    assert residual <= 1e-12
 
 
-def test_lam_c_is_the_largest_root():
+def test_lam_c_is_the_largest_root(report):
+    errors = []
     for nu in (0.3, 0.6, 0.9, 0.999):
-        roots = np.roots([2, -3 * nu ** (-2 / 3), 0, 1])
-        largest = max(r.real for r in roots if abs(r.imag) < 1e-9)
+        largest = largest_root(nu)
         assert g.critical_confinement(nu) == pytest.approx(largest, rel=1e-12)
+        errors.append(abs(g.critical_confinement(nu) / largest - 1))
+    report.value("geometry.largest_root_error", max(errors), reference=0.0, tol=1e-12,
+                 source="numpy.roots")
+
+
+def test_nu_c_inverts_lam_c_on_a_grid(report):
+    nu = np.linspace(0.3, 1.0, 2001)
+    error = report.value("geometry.nu_c_error",
+                         np.max(np.abs(g.critical_reduced_volume(g.critical_confinement(nu)) - nu)),
+                         reference=0.0, tol=1e-12, source="eq. critic2")
+    assert error <= 1e-12
 
 
 @given(nu=NU)
@@ -64,22 +84,49 @@ def test_sphere_limits():
     assert g.critical_reduced_volume(1.0) == 1.0
 
 
-def test_chen_2020_statements():
+def test_chen_2020_statements(report):
     """Chen et al. 2020 §IV.A: nu = 0.6, 90 um^3 -> lam_c ~ 1.98, ell_c ~ 11, d_c ~ 2.8 um, L_c ~ 15.4 um."""
-    R0 = g.volume_radius(90.0)
+    chen = "Chen et al. 2020 §IV.A"
+    R0 = report.value("geometry.R0_90fl", g.volume_radius(90.0), reference=2.78, tol="±0.005",
+                      source=chen)
     assert R0 == pytest.approx(2.78, abs=0.005)           # "R0 ~ 2.8 um"
-    assert g.critical_confinement(0.6) == pytest.approx(1.98, abs=0.005)
-    assert g.critical_length(0.6) == pytest.approx(11.04, abs=0.005)   # physics-notes: 11.04
-    assert g.critical_diameter_um(0.6, R0) == pytest.approx(2.8, abs=0.05)
+    assert report.value("geometry.lam_c_0.6", g.critical_confinement(0.6), reference=1.98,
+                        tol="±0.005", source=chen) == pytest.approx(1.98, abs=0.005)
+    assert report.value("geometry.ell_c_0.6", g.critical_length(0.6), reference=11.04,
+                        tol="±0.005", source="physics-notes") == pytest.approx(11.04, abs=0.005)
+    assert report.value("geometry.d_c_0.6", g.critical_diameter_um(0.6, R0), reference=2.8,
+                        tol="±0.05", source=chen) == pytest.approx(2.8, abs=0.05)
     # Our 15.48 um versus the paper's 15.4 um: the paper rounds ell_c to 11 (11 * 1.40 = 15.4).
-    assert g.critical_length_um(0.6, R0) == pytest.approx(15.4, rel=0.01)
+    L_c = report.value("geometry.L_c_0.6", g.critical_length_um(0.6, R0), reference=15.4,
+                       tol="1 %", source=chen)
+    assert L_c == pytest.approx(15.4, rel=0.01)
+    report.value("geometry.L_c_0.6_excess_pct", 100 * (L_c / 15.4 - 1), reference=0.0,
+                 tol="1 %", source=chen)
 
 
-def test_cell_geometry_against_direct_formulas():
+def test_default_red_cell_geometry(report):
+    """The default red cell (90 fL, 135 um^2): lam_c by numpy.roots, L_c from the volume of a
+    cylinder with hemispherical caps of radius R0/lam_c (in units of the cap radius:
+    ell_c = 2 + (4/3)(lam_c^3 - 1))."""
+    nu, R0 = g.cell_from_volume_area(90.0, 135.0)
+    lam_c = report.value("geometry.rbc_lam_c", g.critical_confinement(nu),
+                         reference=largest_root(nu), tol="1e-12 rel", source="numpy.roots")
+    assert lam_c == pytest.approx(largest_root(nu), rel=1e-12)
+    d_c = report.value("geometry.rbc_d_c", g.critical_diameter_um(nu, R0),
+                       reference=2 * R0 / lam_c, tol="1e-13 rel", source="d_c = 2 R0/lam_c")
+    assert d_c == pytest.approx(2 * R0 / lam_c, rel=1e-13)
+    L_ref = (2 + 4 / 3 * (largest_root(nu) ** 3 - 1)) * R0 / largest_root(nu)
+    L_c = report.value("geometry.rbc_L_c", g.critical_length_um(nu, R0), reference=L_ref,
+                       tol="1e-12 rel", source="spherocylinder of volume 4 pi R0^3/3")
+    assert L_c == pytest.approx(L_ref, rel=1e-12)
+
+
+def test_cell_geometry_against_direct_formulas(report):
     nu, R0 = g.cell_from_volume_area(90.0, 135.0)
     RA = math.sqrt(135.0 / (4 * math.pi))
     assert R0 == pytest.approx((3 * 90.0 / (4 * math.pi)) ** (1 / 3), rel=1e-14)
-    assert nu == pytest.approx((R0 / RA) ** 3, rel=1e-13)
+    assert report.value("geometry.rbc_nu", nu, reference=(R0 / RA) ** 3, tol="1e-13 rel",
+                        source="(R0/RA)^3") == pytest.approx((R0 / RA) ** 3, rel=1e-13)
     assert g.confinement_from_diameter(R0, 4.0) == pytest.approx(R0 / 2.0, rel=1e-15)
 
 

@@ -57,9 +57,13 @@ def bending():
 
 # --------------------------------------------------------------------------- acceptance, units
 @pytest.mark.parametrize("which", ["high_ca", "bending"])
-def test_near_critical_solution_is_accepted(which, request):
+def test_near_critical_solution_is_accepted(which, request, report):
     res = request.getfixturevalue(which)
     _assert_accepted(res)
+    for name, limit in (("area_error", CONSTRAINT_TOL), ("volume_error", CONSTRAINT_TOL),
+                        ("force_balance_residual", FORCE_TOL)):
+        report.value(f"lub.{name}_{which}", getattr(res, name), reference=0.0, tol=limit,
+                     source="the solution's own constraint targets")
     assert res.model == ("high-Ca" if which == "high_ca" else "bending")
     assert res.shape_class == "bullet"
     assert 1 < res.V_over_U < 1.02 and res.dp_plus_R0 > 0
@@ -87,11 +91,13 @@ def test_output_conversion_factors(high_ca, bending):
 
 
 @pytest.mark.parametrize("which", ["high_ca", "bending"])
-def test_pressure_drop_equals_the_integrated_wall_shear(which, request):
+def test_pressure_drop_equals_the_integrated_wall_shear(which, request, report):
     """Delta p = -2 int tau_wall dx (momentum of fluid + vesicle between the pole sections)."""
     res = request.getfixturevalue(which)
     delta_p = res.pressure[0] - res.pressure[-1]
     wall = -2 * simpson(res.shear_wall, x=res.x)
+    report.value(f"lub.momentum_{which}", abs(wall / delta_p - 1), reference=0.0, tol="1e-5 rel",
+                 source="momentum balance, Simpson's rule on the profiles")
     assert wall == pytest.approx(delta_p, rel=1e-5)
 
 
@@ -102,9 +108,13 @@ def test_length_and_shape_are_a_slightly_thinned_spherocylinder(high_ca):
     assert np.all(np.diff(high_ca.s) > 0)
 
 
-def test_mesh_convergence_against_a_tighter_tolerance(high_ca):
+def test_mesh_convergence_against_a_tighter_tolerance(high_ca, report):
     tight = solve_lubrication(0.9, lam_ratio=0.99, tol=high_ca.tol / 100)
     _assert_accepted(tight)
+    report.value("lub.mesh_Q", abs(high_ca.Q / tight.Q - 1), reference=0.0, tol="1e-6 rel",
+                 source="solution at a 100 times tighter tolerance")
+    report.value("lub.mesh_dp", abs(high_ca.dp_plus_R0 / tight.dp_plus_R0 - 1), reference=0.0,
+                 tol="1e-5 rel", source="solution at a 100 times tighter tolerance")
     assert high_ca.Q == pytest.approx(tight.Q, rel=1e-6)
     assert high_ca.dp_plus_R0 == pytest.approx(tight.dp_plus_R0, rel=1e-5)
     assert high_ca.n_nodes < tight.n_nodes
@@ -118,7 +128,7 @@ def test_bending_tends_to_the_high_ca_model(high_ca):
 
 
 # --------------------------------------------------------------------------- physics limits
-def test_immobile_interface_bretherton_constant():
+def test_immobile_interface_bretherton_constant(report):
     """Film flux Q = h_inf against the front tension: Q / (6 eta V/sigma_F)^(2/3) -> 0.643.
 
     Measured 0.6404 at delta = 1e-3 (0.6428 at 1e-4, the error falls like delta); the loose
@@ -127,10 +137,12 @@ def test_immobile_interface_bretherton_constant():
     res = solve_lubrication(0.9, lam_ratio=0.999)
     _assert_accepted(res)
     sigma_front_eta_v = res.tension_front / res.V_over_U          # eta U -> eta V
-    assert res.Q / (6 / sigma_front_eta_v) ** (2 / 3) == pytest.approx(BRETHERTON, rel=0.01)
+    assert report.value("lub.bretherton_1e-3", res.Q / (6 / sigma_front_eta_v) ** (2 / 3),
+                        reference=BRETHERTON, tol="1 %", source="Bretherton, immobile interface"
+                        ) == pytest.approx(BRETHERTON, rel=0.01)
 
 
-def test_near_critical_speed_and_pressure_approach_their_limits_at_the_measured_order():
+def test_near_critical_speed_and_pressure_approach_their_limits_at_the_measured_order(report):
     """nu = 0.9, delta = 4e-3, 1e-3, 2.5e-4: the errors of V/U = 1 + delta and of the leading
     term of eq. asmyp2 fall like delta^(3/2) and delta^(1/2) (measured orders 1.41, 1.44 and
     0.44, 0.47, approaching 1.5 and 0.5 from below; accepted 1.3-1.7 and 0.35-0.65).
@@ -145,6 +157,12 @@ def test_near_critical_speed_and_pressure_approach_their_limits_at_the_measured_
     dp_err = np.abs(np.array([r.dp_plus_R0 for r in res]) / lead - 1)
     order_speed = np.log(speed_err[:-1] / speed_err[1:]) / np.log(4)
     order_dp = np.log(dp_err[:-1] / dp_err[1:]) / np.log(4)
+    for i, o in enumerate(order_speed):
+        report.value(f"lub.order_speed_{i}", o, reference=1.5, tol="1.3–1.7",
+                     source="physics notes §4: V/U = 1 + delta + O(delta^1.5)")
+    for i, o in enumerate(order_dp):
+        report.value(f"lub.order_dp_{i}", o, reference=0.5, tol="0.35–0.65",
+                     source="eq. asmyp2 leading term (1 + O(delta^0.5))")
     assert np.all((order_speed > 1.3) & (order_speed < 1.7)), (speed_err, order_speed)
     assert np.all((order_dp > 0.35) & (order_dp < 0.65)), (dp_err, order_dp)
     slope = (res[-1].V_over_U - 1) / deltas[-1]
@@ -257,7 +275,7 @@ def test_reaches_lam_ratio_0_999(nu, ca_b):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("nu", NUS)
-def test_measured_slope_near_critical_against_eq_asmyp1(nu):
+def test_measured_slope_near_critical_against_eq_asmyp1(nu, report):
     """Slope d(V/U)/d delta at delta -> 0 by a fit V/U - 1 = a delta + b delta^1.5 + c delta^2
     over delta = 1e-4 ... 4e-3: a = 1 within 0.01 (the model's structure), whatever eq. asmyp1
     says (1.02-1.16 for nu = 0.6-0.98)."""
@@ -267,6 +285,8 @@ def test_measured_slope_near_critical_against_eq_asmyp1(nu):
         _assert_accepted(r)
     v = np.array([r.V_over_U - 1 for r in res])
     a, b, c = np.linalg.lstsq(np.vstack([deltas, deltas**1.5, deltas**2]).T, v, rcond=None)[0]
+    report.value(f"lub.fitted_slope_{nu}", a, reference=1.0, tol="±0.01",
+                 source="physics notes §4, Chen et al. eq. vel2")
     assert a == pytest.approx(1.0, abs=0.01), (a, speed_slope_near_critical(nu))
 
 
