@@ -75,7 +75,7 @@ DEFAULT_GRID = {
     "lam_ratio": {"bem": [0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98],
                   "lubrication": [0.9, 0.92, 0.94, 0.95, 0.96, 0.97, 0.98, 0.99, 0.995, 0.999,
                                   0.9999]},
-    "ca_b": [5.0, 15.0, 50.0, 500.0],
+    "ca_b": [5.0, 15.0, 25.0, 50.0, 150.0, 500.0],
 }
 
 #: Solver options per method (keyword arguments of solve_vesicle / solve_lubrication); the
@@ -165,21 +165,25 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
         if left is not None and left <= 0:
             failures.append(f"{label}: not tried, max_time spent")
             break
+        initial = None
         try:
             initial = make_initial()
+            res = solve_vesicle(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial,
+                                max_time=left, **options)
         except InvalidParameterError as exc:
-            # the neighbour's density does not carry over to this volume: the next start
+            if initial is None and label == "own":
+                raise
+            # the neighbour's shape or density does not carry over to this point (e.g. its
+            # density turns negative on the new curve): the next start
             failures.append(f"{label}: cannot start ({exc})")
             continue
-        res = solve_vesicle(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial, max_time=left,
-                            **options)
+        seed = res.seed if initial is None else label
         bie += res.bie_solves
         if res.success:
             break
         failures.append(f"{label}: {res.message}")
     if res is None:                  # no start could run: a failed point (stored by _point)
         raise RuntimeError("; ".join(failures))
-    seed = res.seed if initial is None else label
     message = res.message if res.success else "; ".join(failures)
     d = res.to_dict(shape=False)
     est = res.error_estimate if res.success else {}

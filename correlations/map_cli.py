@@ -79,6 +79,30 @@ def cmd_map_build(args):
     return out, format_rows(rows, f"Solution map build in {args.out}")
 
 
+def coverage_summary(data: dict) -> dict:
+    """Counts of the packed map: converged points per method, the BEM grid nodes answered by
+    lubrication instead, and the nodes where no method converged (with the BEM reason)."""
+    cols, grid = data["columns"], data["grid"]
+    have = {(m, nu, r, ca) for m, nu, r, ca in zip(cols["method"], cols["nu"],
+                                                   cols["lam_ratio"], cols["ca_b"])}
+    reason = {(h["nu"], h["lam_ratio"], h["ca_b"]): h["reason"] for h in data["holes"]
+              if h["method"] == "bem"}
+    nodes = [(nu, r, ca) for nu in grid["nu"] for ca in grid["ca_b"]
+             for r in sorted({r for rs in grid["lam_ratio"].values() for r in rs})]
+    bem_grid = set(grid["lam_ratio"].get("bem", []))
+    return {"grid": {"nu": len(grid["nu"]), "ca_b": grid["ca_b"], "nodes": len(nodes),
+                     "lam_ratio": {m: len(v) for m, v in grid["lam_ratio"].items()}},
+            "points": {m: sum(k[0] == m for k in have) for m in grid["methods"]},
+            "bem_nodes": sum(1 for nu, r, ca in nodes if r in bem_grid),
+            "lubrication_for_bem": [[nu, r, ca] for nu, r, ca in nodes if r in bem_grid
+                                    and ("bem", nu, r, ca) not in have
+                                    and ("lubrication", nu, r, ca) in have],
+            "holes": [{"nu": nu, "lam_ratio": r, "ca_b": ca,
+                       "reason": reason.get((nu, r, ca), "not computed")}
+                      for nu, r, ca in nodes if not any((m, nu, r, ca) in have
+                                                        for m in grid["methods"])]}
+
+
 def coverage(data: dict) -> str:
     """The packed map's coverage as text: per Ca_B a ν × λ/λc table with B (BEM point),
     L (lubrication point only) or . (hole), then every hole where no method converged, with
@@ -132,7 +156,7 @@ def cmd_map_pack(args):
     data = json.loads(path.read_text(encoding="utf-8"))
     out = {"command": "map pack", "converged": True, "map": str(path),
            "points": len(data["columns"]["nu"]), "holes": len(data["holes"]),
-           "bytes": path.stat().st_size}
+           "bytes": path.stat().st_size, "coverage": coverage_summary(data)}
     from lubrication.cli_contract import format_rows
     rows = [(k, out[k], "", "", "") for k in ("map", "points", "holes", "bytes")]
     return out, format_rows(rows, f"Packed {args.folder}") + "\n\n" + coverage(data)
@@ -217,7 +241,7 @@ def add_map_parser(subparsers) -> None:
     b.add_argument("--lam-ratio-lubrication", type=finite_float, nargs="+",
                    help="lam/lam_c of the lubrication lines only [-]")
     b.add_argument("--ca-b", type=finite_float, nargs="+",
-                   help="bending capillary numbers eta U R0^2/kappa > 0 [-] (default 5 15 50 500)")
+                   help="bending capillary numbers eta U R0^2/kappa > 0 [-] (default 5 15 25 50 150 500)")
     b.add_argument("--methods", nargs="+", choices=("bem", "lubrication"),
                    help="solvers (default both)")
     b.add_argument("--bem-n-modes", type=positive_int,

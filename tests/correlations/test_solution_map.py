@@ -309,9 +309,11 @@ def test_lubrication_only_nodes_between_bem_points_are_left_out(tmp_path):
     assert beyond.model_error / beyond.value == pytest.approx(_lub(0.1, 0.98) - 1, rel=0.1)
 
 
-def test_a_neighbour_shape_that_cannot_start_falls_back_to_the_own_seed(monkeypatch):
-    """A neighbour whose density does not carry over to the point's volume (the build met
-    'min g = -0.354' at (0.85, 0.9 lam_c, Ca_B 25)) is a failed start, not a failed point."""
+@pytest.mark.parametrize("where", ["rescaling", "solver"])
+def test_a_neighbour_shape_that_cannot_start_falls_back_to_the_own_seed(monkeypatch, where):
+    """A neighbour whose density does not carry over to the point (the build met 'min g =
+    -0.354' at (0.85, 0.9 lam_c, Ca_B 25), raised inside the solver) is a failed start, not a
+    failed point."""
     import types
 
     import numpy as np
@@ -320,13 +322,18 @@ def test_a_neighbour_shape_that_cannot_start_falls_back_to_the_own_seed(monkeypa
     import bem.vesicle
     from lubrication.checks import InvalidParameterError
 
-    def closed(*args, **kwargs):
+    def bad_density():
         raise InvalidParameterError("density", "min g = -0.354", "coefficients with g > 0")
+
+    def closed(*args, **kwargs):
+        return bad_density() if where == "rescaling" else "neighbour curve"
 
     calls = []
 
     def solve(nu, lam_ratio, ca_b, initial=None, max_time=None, **options):
         calls.append(initial)
+        if initial is not None:
+            bad_density()
         d = {"lam": 1.0, "lam_c": 1.2, "shape_class": "bullet", "residual": 1e-6, "panels": 10,
              "refinement": [(16,), (24,)], "tol": 1e-4, "residual_tol": 1e-3,
              **{q: 1.0 for q in QUANTITIES}}
@@ -338,5 +345,6 @@ def test_a_neighbour_shape_that_cannot_start_falls_back_to_the_own_seed(monkeypa
     monkeypatch.setattr(bem.vesicle, "solve_vesicle", solve)
     warm = {"nu": 0.9, "lam_ratio": 0.9, "shape": {"modes": [0.0], "density": [1.0]}}
     fields, _ = map_build._solve_bem(0.85, 0.9, 25.0, warm, {}, None)
-    assert calls == [None] and fields["success"] and fields["seed"] == "lubrication"
+    assert calls == ([None] if where == "rescaling" else ["neighbour curve", None])
+    assert fields["success"] and fields["seed"] == "lubrication"
     assert fields["failed_starts"][0].startswith("neighbour (nu=0.9, lam/lam_c=0.9): cannot start")
