@@ -509,6 +509,24 @@ def _curves_plot(ctx, key, plot_laws, ylabel):
     return fig, ax, curves, nodes, cached
 
 
+def _small_sphere_rows(figure, nodes, key, law, name, eq):
+    """Statements "λ < 0.5: within 1 % of the small-sphere law" at ν = 0.98 and 0.9 for quantity
+    ``key`` of the map nodes against ``law`` (Chen et al. 2020 eq. small1 or small2), and the
+    ν = 0.6 nodes' relative deviations from it (returned for the exception statement)."""
+    rows = []
+    for nu in (0.98, 0.9, 0.6):
+        small = [p for p in nodes if abs(p["nu"] - nu) < 1e-9 and p["lam"] < 0.5]
+        with _quiet():
+            devs = [p[key] / float(law(p["lam"])) - 1.0 for p in small]
+        if nu == 0.6:
+            return rows, devs
+        dev = max(abs(d) for d in devs)
+        rows.append(Statement(figure, f"λ < 0.5: {name} within 1 % of the small-sphere law "
+                              f"(eq. {eq}), ν = {nu:g}", "< 0.01", _fmt(dev, 3), "≤ 0.01",
+                              _verdict(dev <= 0.01), "largest relative deviation over the "
+                              f"map nodes λ = {', '.join(_fmt(p['lam'], 3) for p in small)}"))
+
+
 def figure_speed(ctx):
     """Fig. vel of Chen et al. (2020): V/U against λ for ν = 0.6 … 0.98 at Ca_B = 50 (map),
     with the small-sphere law (eq:small1), the near-critical asymptote (eq:asmyp1) and our
@@ -519,19 +537,9 @@ def figure_speed(ctx):
     fig, ax, curves, nodes, cached = _curves_plot(ctx, "V_over_U", plot_speed_asymptotics,
                                                   "V/U [-]")
     ax.set_ylim(0.95, 2.05)
-    rows = []
-    for nu in (0.98, 0.9):
-        small = [p for p in nodes if abs(p["nu"] - nu) < 1e-9 and p["lam"] < 0.5]
-        with _quiet():
-            dev = max(abs(p["V_over_U"] / float(speed_small_sphere(p["lam"])) - 1.0)
-                      for p in small)
-        rows.append(Statement("speed", f"λ < 0.5: V/U within 1 % of the small-sphere law "
-                              f"(eq. small1), ν = {nu:g}", "< 0.01", _fmt(dev, 3), "≤ 0.01",
-                              _verdict(dev <= 0.01), f"largest relative deviation over the "
-                              f"map nodes λ = {', '.join(_fmt(p['lam'], 3) for p in small)}"))
-    small = [p for p in nodes if abs(p["nu"] - 0.6) < 1e-9 and p["lam"] < 0.5]
-    with _quiet():
-        dev = min(p["V_over_U"] / float(speed_small_sphere(p["lam"])) - 1.0 for p in small)
+    rows, devs = _small_sphere_rows("speed", nodes, "V_over_U", speed_small_sphere, "V/U",
+                                    "small1")
+    dev = min(devs)
     rows.append(Statement("speed", "ν = 0.6 is an exception at λ < 0.5: decreased mobility",
                           "V/U below eq. small1 by more than 1 %", _fmt(dev, 3), "< −0.01",
                           _verdict(dev < -0.01), "most negative relative deviation from "
@@ -568,19 +576,9 @@ def figure_pressure(ctx):
     from lubrication.plotting import plot_dp_plus_asymptotics
     fig, ax, curves, nodes, cached = _curves_plot(ctx, "dp_plus_R0", plot_dp_plus_asymptotics,
                                                   "Δp⁺R0/(ηU) [-]")
-    rows = []
-    for nu in (0.98, 0.9):
-        small = [p for p in nodes if abs(p["nu"] - nu) < 1e-9 and p["lam"] < 0.5]
-        with _quiet():
-            dev = max(abs(p["dp_plus_R0"] / float(dp_plus_small_sphere(p["lam"])) - 1.0)
-                      for p in small)
-        rows.append(Statement("pressure", f"λ < 0.5: Δp⁺ within 1 % of the small-sphere law "
-                              f"(eq. small2), ν = {nu:g}", "< 0.01", _fmt(dev, 3), "≤ 0.01",
-                              _verdict(dev <= 0.01), "largest relative deviation over the map "
-                              f"nodes λ = {', '.join(_fmt(p['lam'], 3) for p in small)}"))
-    small = [p for p in nodes if abs(p["nu"] - 0.6) < 1e-9 and p["lam"] < 0.5]
-    with _quiet():
-        dev = max(p["dp_plus_R0"] / float(dp_plus_small_sphere(p["lam"])) - 1.0 for p in small)
+    rows, devs = _small_sphere_rows("pressure", nodes, "dp_plus_R0", dp_plus_small_sphere,
+                                    "Δp⁺", "small2")
+    dev = max(devs)
     rows.append(Statement("pressure", "ν = 0.6 is an exception at λ < 0.5: enhanced pressure "
                           "drop", "Δp⁺ above eq. small2 by more than 1 %", _fmt(dev, 3),
                           "> 0.01", _verdict(dev > 0.01), "largest relative excess over the "

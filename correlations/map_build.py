@@ -72,10 +72,10 @@ SCHEDULER_TIMEOUT_S = 5
 DEFAULT_GRID = {
     "methods": list(METHODS),
     "nu": [0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95, 0.98],
-    "lam_ratio": {"bem": [0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98],
+    "lam_ratio": {"bem": [0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 0.98],
                   "lubrication": [0.9, 0.92, 0.94, 0.95, 0.96, 0.97, 0.98, 0.99, 0.995, 0.999,
                                   0.9999]},
-    "ca_b": [5.0, 15.0, 25.0, 50.0, 150.0, 500.0],
+    "ca_b": [5.0, 9.0, 15.0, 25.0, 50.0, 150.0, 500.0],
 }
 
 #: Solver options per method (keyword arguments of solve_vesicle / solve_lubrication); the

@@ -241,7 +241,7 @@ def add_map_parser(subparsers) -> None:
     b.add_argument("--lam-ratio-lubrication", type=finite_float, nargs="+",
                    help="lam/lam_c of the lubrication lines only [-]")
     b.add_argument("--ca-b", type=finite_float, nargs="+",
-                   help="bending capillary numbers eta U R0^2/kappa > 0 [-] (default 5 15 25 50 150 500)")
+                   help="bending capillary numbers eta U R0^2/kappa > 0 [-] (default 5 9 15 25 50 150 500)")
     b.add_argument("--methods", nargs="+", choices=("bem", "lubrication"),
                    help="solvers (default both)")
     b.add_argument("--bem-n-modes", type=positive_int,

@@ -76,15 +76,16 @@ leave-one-out (LOO) error on that axis, in the interpolated (transformed) variab
 over the axes it does not sit on, the largest LOO error on that axis of the points at the
 corners of its grid cell (the nodes that bracket it on every axis; on each line the λ/λc nodes
 it uses), taking the corners at interior nodes of the axis where there are any (an end node's
-LOO is an extrapolation), plus the weighted errors of the inner axes. LOO removes a node and so
-doubles the local spacing: for degree-2 interpolation (error ∝ h³) it overestimates the error of
-the full grid, up to eightfold where the data are smooth and more next to a node; it is kept
-unscaled because the map also holds branch changes (at Ca_B ≤ 15 and λ/λc ≤ 0.3 the low-ν
-vesicles are elongated prolate shapes, parachutes above), where the LOO error is the honest
-one. Measured on a map with every other ν node, or λ/λc node, removed and queried at the removed
-nodes: the bar covers the true error at 86–100 % of them, median 5–11× it
-(tests/benchmarks/map_error_bars.py; docs/validation.md, solution map). Queries that used the
-largest LOO of all the nodes of their stencil (the first version) were 10–1000× the true error.
+LOO is an extrapolation), plus the weighted errors of the inner axes, and divides the sum by
+:data:`LOO_RATIO` = 2. Removing a node doubles the local spacing; interpolation of degree p
+has an error ∝ h^(p+1), so where the data are smooth LOO overestimates the full grid's error
+4× (linear stencils) to 8× (quadratic). The map's data are not everywhere that smooth (branch
+changes, a coarse Ca_B axis), so only the factor 2 is taken out. Measured: on the off-grid
+points of tests/benchmarks/map_offgrid.py the bar covers the error at 96–100 % of them, and on
+a map with every other ν node, or some λ/λc nodes, left out (tests/benchmarks/map_error_bars.py,
+where LOO spans four grid steps) at 72–94 %; the numbers are in docs/validation.md (solution
+map). Unscaled, the bar was 25–35× the off-grid error (median); divided by 4, it covered only
+52–88 % on the coarsened map.
 ``solver_error``: the solver's own error estimate (BEM refinement
 pair |fine − coarse| for V/U, Δp⁺ and γ_max; none otherwise) propagated with the interpolation
 weights; None when a neighbour has none. ``model_error``: see the rule above (and the Ca_B clamp
@@ -166,9 +167,7 @@ _BASE_COLUMNS = {
     "bie_solves": "boundary-integral solves of the point (BEM; None for lubrication)",
     "seconds": "wall-clock time of the point [s]",
 }
-#: Leave-one-out doubles the local node spacing; interpolation of degree p has an error
-#: ∝ h^(p+1), so a node's LOO error is 2^(p+1) times the full grid's: 4 for linear, 8 for
-#: quadratic stencils. The error bar divides by the smaller, 4 (module docstring, error bar).
+#: What the error bar divides the leave-one-out errors by (module docstring, error bar).
 LOO_RATIO = 2.0
 _DIGITS = {"residual": 3, "seconds": 3}   # significant digits of a packed column (default 10)
 _PACK_RTOL = 5e-10                          # relative rounding of a 10-digit packed value
