@@ -17,7 +17,8 @@ Cache
     Every figure's data is one JSON file in ``<out>/cache``, named by the figure and a hash of
     its parameters and of the map's and build folder's fingerprints (provenance, content hash,
     point files), written atomically (:func:`lubrication.io.write_json`). A run with the cache
-    filled only draws. Each BEM solve is cached on its own, so an interrupted run keeps them.
+    filled only draws. Each solve is cached on its own, keyed by its parameters and its seed
+    (not by the map), so an interrupted run keeps them and a new map does not redo them.
 
 Comparison
     Each figure returns :class:`Statement` rows: the paper's statement, our value, the paper's
@@ -132,11 +133,14 @@ class FigureContext:
             self._points = read_points(self.build) if self.build.is_dir() else []
         return self._points
 
-    def cached(self, what: str, params: dict, compute):
+    def cached(self, what: str, params: dict, compute, inputs=None):
         """``compute()`` (JSON-ready data) cached in ``cache/<what>-<hash>.json``, the hash over
-        ``params`` and :attr:`fingerprint`. Returns (data, True if read from the cache)."""
+        ``params`` and ``inputs``: what the data depend on besides the parameters, by default
+        :attr:`fingerprint` (a solve gives {} or its seed). Returns (data, True if read from
+        the cache)."""
         from lubrication.io import clean_json, write_json
-        key = json.dumps({"what": what, "params": params, "inputs": self.fingerprint},
+        inputs = self.fingerprint if inputs is None else inputs
+        key = json.dumps({"what": what, "params": params, "inputs": inputs},
                          sort_keys=True, default=str)
         path = self.cache / f"{what}-{hashlib.sha256(key.encode()).hexdigest()[:16]}.json"
         if path.is_file():
@@ -146,8 +150,7 @@ class FigureContext:
                 pass                                    # unreadable: recompute
         data = clean_json(compute())
         self.cache.mkdir(parents=True, exist_ok=True)
-        write_json(path, {"what": what, "params": params, "inputs": self.fingerprint,
-                          "data": data})
+        write_json(path, {"what": what, "params": params, "inputs": inputs, "data": data})
         return data, False
 
 
@@ -312,7 +315,7 @@ def figure_shapes_cab(ctx):
     for ca in CA_B_SERIES:
         d, cached = ctx.cached("bem_vesicle", {"nu": 0.84, "lam": 1.0, "ca_b": ca,
                                                "max_time": ctx.bem_max_time},
-                               lambda ca=ca: _bem_solve(ctx, 0.84, 1.0, ca))
+                               lambda ca=ca: _bem_solve(ctx, 0.84, 1.0, ca), inputs={})
         cached_all &= cached
         ctx.progress(f"  Ca_B = {ca:g}: " + ("converged" if d["success"] else "NOT converged")
                      + (" (cached)" if cached else f" in {d['seconds']:.0f} s"))
@@ -806,9 +809,9 @@ def _nearest_stored(ctx, nu, lam_ratio, ca_b):
                + math.log10(p["ca_b"] / ca_b) ** 2)
 
 
-def _bem_tension(ctx, nu, lam):
+def _bem_tension(ctx, nu, lam, p):
+    """One BEM solve at (ν, λ) started from the stored point ``p``'s shape."""
     from bem.shape import SpectralCurve
-    p = _nearest_stored(ctx, nu, lam / float(critical_confinement(nu)), CA_B)
     curve = SpectralCurve.closed(p["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
                                  density=p["shape"]["density"])
     return _bem_solve(ctx, nu, lam, CA_B, initial=curve,
@@ -831,11 +834,14 @@ def figure_tension(ctx):
     nearest stored BEM shape, drawn only if it converged."""
     nu, lam = TENSION_POINT
     lub, c1 = ctx.cached("lubrication_tension", {"nu": nu, "lam": lam, "ca_b": CA_B},
-                         lambda: _lubrication_tension(nu, lam))
+                         lambda: _lubrication_tension(nu, lam), inputs={})
     ctx.progress("  lubrication: " + ("converged" if lub["success"] else "NOT converged"))
+    p = _nearest_stored(ctx, nu, lam / float(critical_confinement(nu)), CA_B)
+    seed = {k: p[k] for k in ("nu", "lam_ratio", "ca_b")}
+    seed["shape"] = hashlib.sha256(json.dumps(p["shape"]).encode()).hexdigest()[:16]
     bem, c2 = ctx.cached("bem_tension", {"nu": nu, "lam": lam, "ca_b": CA_B,
                                          "max_time": ctx.bem_max_time},
-                         lambda: _bem_tension(ctx, nu, lam))
+                         lambda: _bem_tension(ctx, nu, lam, p), inputs={"seed": seed})
     ctx.progress("  BEM: " + ("converged" if bem["success"] else "NOT converged")
                  + (" (cached)" if c2 else f" in {bem['seconds']:.0f} s"))
     fig, (ax,) = _new_figure(1, 1, (7.0, 4.4))
