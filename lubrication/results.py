@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .io import clean_json, save_result, write_json
+from .io import clean_json, save_json, save_result
 
 __all__ = ["LubricationResult", "PROFILE_COLUMNS"]
 
@@ -161,8 +161,6 @@ class LubricationResult:
             if not self.success:
                 stem += "_failed"
         if not self.success:
-            directory = Path(directory)
-            directory.mkdir(parents=True, exist_ok=True)
-            return (write_json(directory / f"{stem}.json", self.to_dict()),)
+            return (save_json(directory, stem, self.to_dict()),)
         return save_result(directory, stem, self.to_dict(), PROFILE_COLUMNS,
                            lambda name: np.asarray(getattr(self, name)))
