@@ -164,6 +164,13 @@ def check_passes(nu, lam):
     return scalar_or_array(lam_c)
 
 
+def check_confinement(nu, lam):
+    """Checked ``(nu, lam, lam_c)`` as float arrays for the laws of ``(nu, lam)``: raises
+    :class:`CannotPassError` unless ``0 < lam < lam_c(nu)`` (:func:`check_passes`)."""
+    lam_c = np.asarray(check_passes(nu, lam))
+    return np.asarray(nu, dtype=float), np.asarray(lam, dtype=float), lam_c
+
+
 def resolve_confinement(nu, lam=None, lam_ratio=None, *, nu_reason: str = ""):
     """Checked scalar ``(nu, lam, lam_c)`` from ``lam`` or ``lam_ratio = lam/lam_c`` (exactly one).
 
