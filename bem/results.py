@@ -181,6 +181,7 @@ class DropResult(_SpectralSolution):
         starts.
     """
 
+    # Declared field by field like the other results on purpose: declarations, not repeated logic.
     lam: float
     ca: float
     success: bool
@@ -310,6 +311,7 @@ class VesicleResult(_SpectralSolution):
         Spectral shape and tension coefficients of the fine solution (warm starts).
     """
 
+    # Declared field by field like the other results on purpose: declarations, not repeated logic.
     nu: float
     lam: float
     lam_c: float

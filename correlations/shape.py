@@ -26,6 +26,8 @@ __all__ = [
     "length_chen2020",
 ]
 
+# Docstring sections repeat on purpose: each published law documents its nu, lam (STYLE.md).
+
 # Coefficients of eq. transition, nu_T = A - B lam (linear fit to the BEM transition points).
 _A, _B = 1.126, 0.29
 

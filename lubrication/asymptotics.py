@@ -52,6 +52,8 @@ __all__ = [
     "speed_slope_near_critical",
 ]
 
+# Docstring sections repeat on purpose: each published law documents its nu, lam (STYLE.md).
+
 # Chen et al. 2020 (after eq. small2): their BEM vesicles agree with eq. small1/small2 within 1 %
 # for lam < 0.5 ("particularly for nearly spherical vesicles"; nu = 0.6 deviates).
 SMALL_SPHERE_RANGE = ValidityRange.of("Chen et al. 2020 eq. small1/small2 (< 1 % error)",

@@ -39,6 +39,8 @@ __all__ = [
     "critical_length_um",
 ]
 
+# Docstring sections repeat on purpose: each formula documents its own nu, lam (STYLE.md).
+
 
 #: Smallest reduced volume accepted. Below it ell_c ~ nu^(-2) overflows double precision long
 #: before any physical relevance (red cells: nu ~ 0.6; strongly deflated vesicles: nu ~ 0.3).

@@ -70,6 +70,7 @@ class LubricationResult:
         and parameters in model units, for warm starts).
     """
 
+    # Declared field by field like the other results on purpose: declarations, not repeated logic.
     nu: float
     lam: float
     lam_c: float
