@@ -325,6 +325,17 @@ def _vesicle_options(p, sweep: bool) -> None:
     add_max_time_option(p)
 
 
+def _output_options(p, func, *, plot: str, out: str | None = None,
+                    json: str = "print one JSON object on stdout") -> None:
+    """The output options every ``bem`` command shares, in this order: ``--out DIR`` (if ``out``
+    says what it saves), ``--plot FILE`` and ``--json``; then the command ``func``."""
+    if out is not None:
+        p.add_argument("--out", metavar="DIR", help=out)
+    p.add_argument("--plot", metavar="FILE", help=plot)
+    p.add_argument("--json", action="store_true", help=json)
+    p.set_defaults(func=func)
+
+
 def add_bem_parser(subparsers) -> None:
     """Add ``bem sphere``, ``drop``, ``vesicle`` and ``vesicle-sweep`` to the subcommands."""
     from lubrication.cli_contract import (
@@ -348,9 +359,7 @@ def add_bem_parser(subparsers) -> None:
                    help="relative tolerance of the refinement pair, 1e-14 to 0.1 "
                         "(default 1e-8) [-]")
     add_max_time_option(s)
-    s.add_argument("--plot", metavar="FILE", help="write the geometry to FILE (PNG)")
-    s.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    s.set_defaults(func=cmd_bem_sphere)
+    _output_options(s, cmd_bem_sphere, plot="write the geometry to FILE (PNG)")
 
     d = sub.add_parser("drop", help="steady clean drop (viscosity ratio 1) in Poiseuille flow")
     d.add_argument("--lam", type=finite_float, required=True,
@@ -363,26 +372,20 @@ def add_bem_parser(subparsers) -> None:
                    help="relative tolerance of the refinement pair in V/U and dp+, 1e-12 to "
                         "0.1 (default 1e-5) [-]")
     add_max_time_option(d)
-    d.add_argument("--out", metavar="DIR", help="save the result as JSON + CSV shape in DIR")
-    d.add_argument("--plot", metavar="FILE", help="write the drop shape to FILE (PNG)")
-    d.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    d.set_defaults(func=cmd_bem_drop)
+    _output_options(d, cmd_bem_drop, out="save the result as JSON + CSV shape in DIR",
+                    plot="write the drop shape to FILE (PNG)")
 
     v = sub.add_parser("vesicle", help="steady vesicle (inextensible bending membrane, "
                                        "viscosity ratio 1) in Poiseuille flow")
     _vesicle_options(v, sweep=False)
-    v.add_argument("--out", metavar="DIR", help="save the result as JSON + CSV profiles in DIR")
-    v.add_argument("--plot", metavar="FILE", help="write the vesicle shape to FILE (PNG)")
-    v.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    v.set_defaults(func=cmd_bem_vesicle)
+    _output_options(v, cmd_bem_vesicle, out="save the result as JSON + CSV profiles in DIR",
+                    plot="write the vesicle shape to FILE (PNG)")
 
     w = sub.add_parser("vesicle-sweep", help="steady vesicles over a range of confinements "
                                              "(continuation in lam, minutes per point)")
     _vesicle_options(w, sweep=True)
-    w.add_argument("--out", metavar="DIR", help="write the sweep CSV + JSON and each point's "
-                                                "JSON + CSV profiles to DIR (atomic)")
-    w.add_argument("--plot", metavar="FILE", help="write the shapes of all points in the tube "
-                                                  "to FILE (PNG)")
-    w.add_argument("--json", action="store_true", help="print one JSON object on stdout "
-                                                       "(and no progress lines)")
-    w.set_defaults(func=cmd_bem_vesicle_sweep)
+    _output_options(w, cmd_bem_vesicle_sweep,
+                    out="write the sweep CSV + JSON and each point's JSON + CSV profiles to DIR "
+                        "(atomic)",
+                    plot="write the shapes of all points in the tube to FILE (PNG)",
+                    json="print one JSON object on stdout (and no progress lines)")

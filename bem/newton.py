@@ -66,13 +66,18 @@ def _budgeted(fun, deadline, best: list):
 
 
 def _within_budget(solver, fun, z0, deadline, start, **kwargs) -> "LMReport":
-    """Run ``solver(fun, z0, start=start, **kwargs)`` under ``deadline``."""
+    """Run ``solver(fun, z, F, payload, evaluations, **kwargs)`` from the initial state of
+    :func:`_initial_state` under ``deadline`` (the failure report if ``fun`` rejects ``z0``)."""
     best: list = []
     if deadline is not None and start is not None:
         F0, pl0 = start
         best[:] = [float(np.linalg.norm(F0)), np.array(z0, dtype=float), F0, pl0]
     try:
-        return solver(_budgeted(fun, deadline, best), z0, start=start, **kwargs)
+        fun = _budgeted(fun, deadline, best)
+        first = _initial_state(fun, np.array(z0, dtype=float), start)
+        if isinstance(first, LMReport):
+            return first
+        return solver(fun, *first, **kwargs)
     except _Expired:
         log.info("Levenberg–Marquardt: %s", deadline.message())
         _, z, F, payload = best
@@ -121,15 +126,15 @@ def difference_jacobian(fun, z, F, fd_step, exact):
 
 
 def _initial_state(fun, z, start):
-    """(F, payload, evaluations) at ``z``, ``start`` = (F, payload) if the caller has it; an
+    """(z, F, payload, evaluations) at ``z``, ``start`` = (F, payload) if the caller has it; an
     LMReport of the failure if ``fun`` rejects ``z``."""
     if start is not None:
-        return (*start, 0)
+        return (z, *start, 0)
     try:
         F, payload = fun(z)
     except InvalidParameterError as exc:
         return LMReport(False, f"initial shape rejected: {exc}", z, None, None, 0, 1, 0)
-    return F, payload, 1
+    return z, F, payload, 1
 
 
 def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
@@ -163,14 +168,9 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
                           jacobian=jacobian)
 
 
-def _levenberg_marquardt(fun, z0, *, tol, max_iter, fd_step, max_jacobians, exact_columns,
-                         stall, floor_ratio, start, jacobian) -> LMReport:
-    """The iteration of :func:`levenberg_marquardt`."""
-    z = np.array(z0, dtype=float)
-    first = _initial_state(fun, z, start)
-    if isinstance(first, LMReport):
-        return first
-    F, payload, n_eval = first
+def _levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd_step, max_jacobians,
+                         exact_columns, stall, floor_ratio, jacobian) -> LMReport:
+    """The iteration of :func:`levenberg_marquardt` from ``z`` (``n_eval`` evaluations so far)."""
 
     def exact(pl):
         return exact_columns(pl) if exact_columns is not None else {}
@@ -350,14 +350,9 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
                           directions=directions, promise=promise, jacobian=jacobian)
 
 
-def _valley_levenberg_marquardt(fun, z0, *, tol, max_iter, fd_step, max_jacobians,
-                                directions, promise, start, jacobian) -> LMReport:
-    """The iteration of :func:`valley_levenberg_marquardt`."""
-    z = np.array(z0, dtype=float)
-    first = _initial_state(fun, z, start)
-    if isinstance(first, LMReport):
-        return first
-    F, payload, n_eval = first
+def _valley_levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd_step,
+                                max_jacobians, directions, promise, jacobian) -> LMReport:
+    """The iteration of :func:`valley_levenberg_marquardt` from ``z`` (``n_eval`` so far)."""
     norm = float(np.linalg.norm(F))
     history, path = [norm], [z.copy()]
     n_jac, mu = 0, 1e-8

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lubrication.io import clean_json, provenance, save_result, write_json
+from lubrication.io import clean_json, provenance, save_json, save_result
 
 __all__ = ["DROP_PROFILE_COLUMNS", "VESICLE_PROFILE_COLUMNS", "DropResult", "SphereResult",
            "VesicleResult"]
@@ -92,10 +92,32 @@ class SphereResult:
 
     def save(self, directory, name: str | None = None) -> Path:
         """Write ``<directory>/<name>.json`` atomically; returns the path."""
-        directory = Path(directory)
-        directory.mkdir(parents=True, exist_ok=True)
-        name = name or f"bem_sphere_lam{self.lam:.6g}"
-        return write_json(directory / f"{name}.json", self.to_dict())
+        return save_json(directory, name or f"bem_sphere_lam{self.lam:.6g}", self.to_dict())
+
+
+class _SpectralSolution:
+    """What the spectral BEM results (:class:`DropResult`, :class:`VesicleResult`) share: the
+    ``converged`` alias, the fine solution's curve and the scalar part of ``to_dict``."""
+
+    @property
+    def converged(self) -> bool:
+        """Alias of ``success`` (the CLI's key)."""
+        return self.success
+
+    def curve(self):
+        """The fine solution's :class:`bem.shape.SpectralCurve` (centroid at x = 0)."""
+        from .shape import SpectralCurve
+        return SpectralCurve.closed(self.modes, volume=4.0 / 3.0 * math.pi * self.lam**3,
+                                    density=self.density)
+
+    def _scalar_dict(self) -> dict:
+        """``_SCALARS`` as JSON values and ``converged``; the ``PHYSICAL`` outputs None unless
+        ``success``."""
+        out = {k: clean_json(getattr(self, k)) for k in self._SCALARS}
+        out["converged"] = bool(self.success)
+        if not self.success:
+            out.update(dict.fromkeys(self.PHYSICAL))
+        return out
 
 
 # Columns of the CSV written by DropResult.save, with their units.
@@ -110,7 +132,7 @@ DROP_PROFILE_COLUMNS = (
 
 
 @dataclass(frozen=True, eq=False)      # eq=False: arrays have no truth value
-class DropResult:
+class DropResult(_SpectralSolution):
     r"""Steady clean drop (viscosity ratio 1, constant tension) on the axis of a tube (BEM).
 
     Scalings: R = 1, U the mean velocity of the undisturbed Poiseuille flow, eta the viscosity;
@@ -159,6 +181,7 @@ class DropResult:
         starts.
     """
 
+    # Declared field by field like the other results on purpose: declarations, not repeated logic.
     lam: float
     ca: float
     success: bool
@@ -192,17 +215,6 @@ class DropResult:
     shape_length: float = math.nan
     provenance: dict = field(default_factory=provenance, repr=False)
 
-    @property
-    def converged(self) -> bool:
-        """Alias of ``success`` (the CLI's key)."""
-        return self.success
-
-    def curve(self):
-        """The fine solution's :class:`bem.shape.SpectralCurve` (centroid at x = 0)."""
-        from .shape import SpectralCurve
-        return SpectralCurve.closed(self.modes, volume=4.0 / 3.0 * math.pi * self.lam**3,
-                                    density=self.density)
-
     _SCALARS = ("lam", "ca", "success", "message", "V_over_U", "dp_plus_R", "dp_plus_R0",
                 "error_estimate", "length", "max_radius", "film", "curvature_front",
                 "curvature_rear", "volume_error", "residual", "tol", "residual_tol", "panels",
@@ -217,10 +229,7 @@ class DropResult:
 
         With ``shape`` the profile arrays x, r and the modes are included as lists.
         """
-        out = {k: clean_json(getattr(self, k)) for k in self._SCALARS}
-        out["converged"] = bool(self.success)
-        if not self.success:
-            out.update(dict.fromkeys(self.PHYSICAL))
+        out = self._scalar_dict()
         if shape:
             out["shape"] = (clean_json({"x": self.x, "r": self.r, "modes": self.modes,
                                         "density": self.density}) if self.success else None)
@@ -254,7 +263,7 @@ VESICLE_PROFILE_COLUMNS = (
 
 
 @dataclass(frozen=True, eq=False)      # eq=False: arrays have no truth value
-class VesicleResult:
+class VesicleResult(_SpectralSolution):
     r"""Steady vesicle (inextensible Helfrich membrane, viscosity ratio 1) in a tube (BEM).
 
     Scalings: R = 1, U the mean velocity of the undisturbed Poiseuille flow, eta the viscosity;
@@ -302,6 +311,7 @@ class VesicleResult:
         Spectral shape and tension coefficients of the fine solution (warm starts).
     """
 
+    # Declared field by field like the other results on purpose: declarations, not repeated logic.
     nu: float
     lam: float
     lam_c: float
@@ -346,11 +356,6 @@ class VesicleResult:
     provenance: dict = field(default_factory=provenance, repr=False)
 
     @property
-    def converged(self) -> bool:
-        """Alias of ``success`` (the CLI's key)."""
-        return self.success
-
-    @property
     def lam_ratio(self) -> float:
         return self.lam / self.lam_c
 
@@ -359,12 +364,6 @@ class VesicleResult:
         """Boundary-integral solves (BEM evaluations) of the whole solve, continuation rungs
         included (to compare with the time steps of a time-marching solver)."""
         return int(sum(v.get("evaluations", 0) for v in self.iterations.values()))
-
-    def curve(self):
-        """The fine solution's :class:`bem.shape.SpectralCurve` (centroid at x = 0)."""
-        from .shape import SpectralCurve
-        return SpectralCurve.closed(self.modes, volume=4.0 / 3.0 * math.pi * self.lam**3,
-                                    density=self.density)
 
     _SCALARS = ("nu", "lam", "lam_c", "ca_b", "success", "message", "V_over_U", "dp_plus_R0",
                 "dp_plus_R", "ell", "ell_poles", "film_min", "tension_max", "wall_shear_max",
@@ -385,12 +384,10 @@ class VesicleResult:
 
         With ``shape`` the profiles x, r, tension and the spectral coefficients are included.
         """
-        out = {k: clean_json(getattr(self, k)) for k in self._SCALARS}
-        out["converged"] = bool(self.success)
+        out = self._scalar_dict()
         out["lam_ratio"] = clean_json(self.lam_ratio)
         out["bie_solves"] = self.bie_solves
         if not self.success:
-            out.update(dict.fromkeys(self.PHYSICAL))
             out["refinement"] = [[clean_json(level[0]), clean_json(level[1]), None, None, None]
                                  for level in self.refinement]
         if shape:

@@ -140,6 +140,7 @@ def write_report(report, path) -> Path:
 
 def add_check_parser(subparsers) -> None:
     """Add ``check`` to the subcommands."""
+    from .cli import add_map_option
     p = subparsers.add_parser(
         "check", help="check results (CSV or JSON rows: your V/U, dp+, length, film) against "
                       "the physics and our references")
@@ -152,8 +153,6 @@ def add_check_parser(subparsers) -> None:
     p.add_argument("--no-bem", action="store_true",
                    help="skip the BEM references of sphere and drop rows (about a second per "
                         "(lam, Ca)); the small-object laws remain where valid")
-    p.add_argument("--map", metavar="FILE",
-                   help="packed solution map of the vesicle references (default: the shipped "
-                        "correlations/data/solution_map.json)")
+    add_map_option(p, "packed solution map of the vesicle references")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=cmd_check)

@@ -83,6 +83,7 @@ def add_figures_parser(subparsers) -> None:
     """Add ``figures`` to the subcommands."""
     from lubrication.cli_contract import finite_float
 
+    from .cli import add_map_option
     from .figures import FIGURES
     p = subparsers.add_parser(
         "figures", help="regenerate the figures of Chen et al. (2020) from our solvers and "
@@ -94,9 +95,7 @@ def add_figures_parser(subparsers) -> None:
                    help="figure file format (default png)")
     p.add_argument("--only", nargs="+", choices=list(FIGURES), metavar="NAME",
                    help="draw only these figures; names: " + ", ".join(FIGURES))
-    p.add_argument("--map", metavar="FILE",
-                   help="packed solution map (default: the shipped "
-                        "correlations/data/solution_map.json)")
+    add_map_option(p)
     p.add_argument("--bem-max-time", type=finite_float, default=900.0, metavar="SECONDS",
                    help="wall-time budget of each BEM solve (not converged beyond it) [s] "
                         "(default 900)")

@@ -27,6 +27,8 @@ __all__ = [
     "capillary_from_film_chen2020",
 ]
 
+# Docstring sections repeat on purpose: each published law documents its nu, lam (STYLE.md).
+
 #: Prefactor of eq. sfilm4 fitted to the BEM films of Chen et al. 2020 (Ca_v < 1e-2).
 C0_CHEN2020 = 2.0
 #: Immobile-interface Bretherton constant 0.643 * 6**(2/3) ≈ 2.123 (Secomb et al. 1986).

@@ -66,6 +66,8 @@ def cmd_infer(args):
 def add_infer_parser(subparsers) -> None:
     """Add ``infer`` to the subcommands."""
     from lubrication.cli_contract import finite_float, positive_int
+
+    from .cli import add_map_option
     p = subparsers.add_parser(
         "infer", help="infer a cell (nu, lam, volume, area, film, dp+, tension) from its "
                       "measured speed and length in a tube, with uncertainties")
@@ -95,8 +97,6 @@ def add_infer_parser(subparsers) -> None:
     p.add_argument("--samples", type=positive_int, metavar="N",
                    help="propagate the uncertainty by N refitted Gaussian draws (default: "
                         "linearisation, faster)")
-    p.add_argument("--map", metavar="FILE",
-                   help="packed solution map (default: the shipped "
-                        "correlations/data/solution_map.json)")
+    add_map_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=cmd_infer)

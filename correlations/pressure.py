@@ -25,6 +25,8 @@ __all__ = [
     "dp_plus_small_sphere_coupling",
 ]
 
+# Docstring sections repeat on purpose: each published law documents its V/U input (STYLE.md).
+
 # Chen et al. 2020 fig. dpa_film: compiled from "highly confined vesicles (lam -> lam_c)"; the
 # same simulations approach the near-critical asymptotes for delta = 1 - lam/lam_c < 0.1.
 DP_PLUS_FILM_RANGE_CHEN2020 = ValidityRange.of("Chen et al. 2020 fig. dpa_film", delta=(0.0, 0.1))

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from lubrication.checks import ValidityRange, check_positive, check_range, scalar_or_array
-from lubrication.geometry import check_passes, check_reduced_volume
+from lubrication.geometry import check_confinement, check_reduced_volume
 
 __all__ = [
     "TRANSITION_RANGE_CHEN2020",
@@ -25,6 +25,8 @@ __all__ = [
     "shape_class_chen2020",
     "length_chen2020",
 ]
+
+# Docstring sections repeat on purpose: each published law documents its nu, lam (STYLE.md).
 
 # Coefficients of eq. transition, nu_T = A - B lam (linear fit to the BEM transition points).
 _A, _B = 1.126, 0.29
@@ -155,9 +157,7 @@ def shape_class_chen2020(nu, lam, ca_b=None):
     >>> shape_class_chen2020([0.6, 0.7], 1.5)
     array(['parachute', 'bullet'], dtype='<U9')
     """
-    check_passes(nu, lam)
-    nu = np.asarray(nu, dtype=float)
-    lam = np.asarray(lam, dtype=float)
+    nu, lam, _ = check_confinement(nu, lam)
     values = {"nu": nu, "lam": lam}
     if ca_b is not None:
         values["ca_b"] = check_positive("ca_b", ca_b)
@@ -199,8 +199,6 @@ def length_chen2020(nu, lam):
     >>> round(length_chen2020(0.6, 1.94), 3)
     10.81
     """
-    lam_c = np.asarray(check_passes(nu, lam))
-    nu = np.asarray(nu, dtype=float)
-    lam = np.asarray(lam, dtype=float)
+    nu, lam, lam_c = check_confinement(nu, lam)
     LENGTH_RANGE_CHEN2020.warn_outside("length_chen2020", nu=nu, delta=1.0 - lam / lam_c)
     return scalar_or_array(2.0 * nu ** (-2.0 / 3.0) * lam_c * lam)

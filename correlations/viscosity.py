@@ -54,6 +54,8 @@ __all__ = [
     "OutOfRangeWarning",
 ]
 
+# Docstring sections repeat on purpose: each published fit documents its D, H_D (STYLE.md).
+
 VISCOSITY_LAWS = ("pries1992", "pries1994", "pries2005")
 
 #: Fåhræus-effect constants (a, b) [1/µm] of x = 1 + 1.7 exp(-a D) - 0.6 exp(-b D).

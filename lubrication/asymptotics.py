@@ -37,7 +37,7 @@ import math
 import numpy as np
 
 from .checks import ValidityRange, scalar_or_array
-from .geometry import check_passes, critical_confinement
+from .geometry import check_confinement, check_passes, critical_confinement
 
 __all__ = [
     "SMALL_SPHERE_RANGE",
@@ -51,6 +51,8 @@ __all__ = [
     "dp_plus_near_critical",
     "speed_slope_near_critical",
 ]
+
+# Docstring sections repeat on purpose: each published law documents its nu, lam (STYLE.md).
 
 # Chen et al. 2020 (after eq. small2): their BEM vesicles agree with eq. small1/small2 within 1 %
 # for lam < 0.5 ("particularly for nearly spherical vesicles"; nu = 0.6 deviates).
@@ -197,9 +199,7 @@ def dp_plus_small_drop(lam):
 
 def _near_critical(nu, lam):
     """Checked inputs -> (lam, delta, X) with X = lam_c^2 nu^(-2/3) = ell_c/2, broadcast."""
-    lam_c = np.asarray(check_passes(nu, lam))
-    nu = np.asarray(nu, dtype=float)
-    lam = np.asarray(lam, dtype=float)
+    nu, lam, lam_c = check_confinement(nu, lam)
     delta = 1.0 - lam / lam_c
     X = lam_c**2 * nu ** (-2.0 / 3.0)
     return lam, delta, X

@@ -30,6 +30,7 @@ from lubrication.io import atomic_write, clean_json
 #: Option names of the inputs, for the messages of the library's checks.
 OPTION_NAMES = {"nu": "--nu", "lam": "--lam", "lam_ratio": "--lam-ratio", "ca_b": "--ca-b"}
 
+# The row tables below are alike in shape on purpose: data of one format, not repeated logic.
 #: Rows of the single-point table: (key, quantity, unit, method). Unit "-": a pure number.
 INPUT_ROWS = (
     ("nu", "reduced volume nu", "-", "input"),

@@ -58,6 +58,8 @@ __all__ = [
     "BENDING_STATE",
 ]
 
+# Docstring sections repeat on purpose: G, e_m, e_w are separate formulas, each documents r, Q.
+
 # --------------------------------------------------------------------------- 1. local gap flow
 # Below the gap d = 1 - r = SERIES_GAP the exact forms are replaced by their Taylor series in d.
 # The exact forms subtract O(1) terms to leave an O(d^2) denominator, so they lose ~ eps/d^2 of

@@ -39,6 +39,8 @@ __all__ = [
     "critical_length_um",
 ]
 
+# Docstring sections repeat on purpose: each formula documents its own nu, lam (STYLE.md).
+
 
 #: Smallest reduced volume accepted. Below it ell_c ~ nu^(-2) overflows double precision long
 #: before any physical relevance (red cells: nu ~ 0.6; strongly deflated vesicles: nu ~ 0.3).
@@ -162,6 +164,13 @@ def check_passes(nu, lam):
             "lam", lam_b.ravel()[i], f"0 < lam < lam_c={lam_c_b.ravel()[i]:.6g}",
             "lam >= lam_c(nu): the vesicle cannot pass this tube intact")
     return scalar_or_array(lam_c)
+
+
+def check_confinement(nu, lam):
+    """Checked ``(nu, lam, lam_c)`` as float arrays for the laws of ``(nu, lam)``: raises
+    :class:`CannotPassError` unless ``0 < lam < lam_c(nu)`` (:func:`check_passes`)."""
+    lam_c = np.asarray(check_passes(nu, lam))
+    return np.asarray(nu, dtype=float), np.asarray(lam, dtype=float), lam_c
 
 
 def resolve_confinement(nu, lam=None, lam_ratio=None, *, nu_reason: str = ""):

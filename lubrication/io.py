@@ -33,8 +33,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write", "clean_json", "forget_written_files", "provenance", "save_result",
-           "write_json", "written_files"]
+__all__ = ["atomic_write", "clean_json", "forget_written_files", "provenance", "save_json",
+           "save_result", "write_json", "written_files"]
 
 # Every file completed by atomic_write in this process, in order: the command line names them
 # after a run, and after an interrupt (each of them is complete).
@@ -115,6 +115,13 @@ def write_json(path, data, *, indent: int = 2, sort_keys: bool = True) -> Path:
                                                   allow_nan=False))
 
 
+def save_json(directory, stem: str, data: dict) -> Path:
+    """Write ``<directory>/<stem>.json`` by :func:`write_json`, creating ``directory``."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    return write_json(directory / f"{stem}.json", data)
+
+
 def _csv_cell(value) -> str:
     """A number for a CSV cell: ``repr`` (round-trip exact), empty if not finite."""
     value = float(value)
@@ -129,10 +136,8 @@ def save_result(directory, stem: str, data: dict, columns, profiles) -> tuple[Pa
     JSON by :func:`write_json`; floats in the CSV are written with ``repr`` (round-trip exact),
     a non-finite one as an empty cell. Returns the two paths.
     """
-    directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    csv_path = directory / f"{stem}.csv"
-    json_path = write_json(directory / f"{stem}.json", dict(data, profile_columns=dict(columns)))
+    json_path = save_json(directory, stem, dict(data, profile_columns=dict(columns)))
+    csv_path = Path(directory) / f"{stem}.csv"
 
     def write_csv(f):
         w = csv.writer(f, lineterminator="\n")

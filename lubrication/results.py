@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .io import clean_json, save_result, write_json
+from .io import clean_json, save_json, save_result
 
 __all__ = ["LubricationResult", "PROFILE_COLUMNS"]
 
@@ -70,6 +70,7 @@ class LubricationResult:
         and parameters in model units, for warm starts).
     """
 
+    # Declared field by field like the other results on purpose: declarations, not repeated logic.
     nu: float
     lam: float
     lam_c: float
@@ -161,8 +162,6 @@ class LubricationResult:
             if not self.success:
                 stem += "_failed"
         if not self.success:
-            directory = Path(directory)
-            directory.mkdir(parents=True, exist_ok=True)
-            return (write_json(directory / f"{stem}.json", self.to_dict()),)
+            return (save_json(directory, stem, self.to_dict()),)
         return save_result(directory, stem, self.to_dict(), PROFILE_COLUMNS,
                            lambda name: np.asarray(getattr(self, name)))
