@@ -90,8 +90,11 @@ def test_coarse_solution_conserves_volume_and_area_and_is_near_the_reference(coa
     assert res.success, res.message
     assert res.volume_error <= 1e-8 and res.area_error <= 1e-8
     assert res.residual < 1e-2
-    assert res.V_over_U == pytest.approx(REF_09_10["V_over_U"], rel=2e-3)
-    assert res.dp_plus_R0 == pytest.approx(REF_09_10["dp_plus_R0"], rel=2e-3)
+    # the 16-mode error against the 32-mode values: measured V/U +1.78e-5, dp+ -4.05e-5
+    # relative (the pair estimate, 5e-5 and 1.1e-3, is pessimistic); bounds 2x these at this
+    # coarse default resolution, the slow test_residual_falls_spectrally_... holds 2e-6
+    assert res.V_over_U == pytest.approx(REF_09_10["V_over_U"], rel=4e-5)
+    assert res.dp_plus_R0 == pytest.approx(REF_09_10["dp_plus_R0"], rel=8e-5)
     assert res.shape_class == "bullet" and res.curvature_front < 0
     assert 0 < res.film_min < 1 - 1.0 / critical_confinement(0.9) + 0.5
     # the membrane is at rest in its frame, so the tension rises toward the front on average

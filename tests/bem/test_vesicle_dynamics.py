@@ -139,7 +139,14 @@ def steady():
     residual max|u - V e_x| 1.19e-5 (its normal part 9.5e-6)."""
     res = solve_vesicle(NU, LAM, ca_b=CA_B, n_modes=16, tol=0.5, residual_tol=10.0,
                         density="uniform")
+    # tol = 0.5 and residual_tol = 10 accept nearly any shape: success alone proves little, so
+    # the state is held to the small-sphere limits (Faxén V/U = 2 - (4/3) lam^2 = 1.88 and
+    # Chen et al. eq. small2 dp+ R0/(eta U) = 16 lam^6, within the 1 % and 3 % of
+    # docs/validation.md) and to its measured steadiness (residual 1.19e-5)
     assert res.success, res.message
+    assert res.V_over_U == pytest.approx(2 - 4 / 3 * LAM**2, rel=0.01)
+    assert res.dp_plus_R0 == pytest.approx(16 * LAM**6, rel=0.03)
+    assert res.residual < 1.5e-5
     return res
 
 
@@ -161,6 +168,9 @@ def test_integrating_from_the_newton_state_stays_steady(steady, report):
     report.value("dyn.steady16_V", abs(state.V / steady.V_over_U - 1.0), reference=0.0,
                  tol="1e-6 rel", source="the Newton steady state")
     assert np.all(peaks <= 1.2 * newton["residual"]), (peaks, newton["residual"])
+    # 1.5e-5, not the project's acceptance bound 1e-5: at this coarse default resolution (16
+    # modes) the Newton state itself has residual 1.19e-5; the 1e-5 bound is held by the slow
+    # 24-mode test_stays_steady_below_1e_5_at_24_modes (Newton residual 6.7e-7)
     assert np.all(peaks <= 1.5e-5)
     assert np.all(np.abs(np.array([h[2] for h in info["history"]]) / newton["V"] - 1) < 1e-6)
     assert abs(state.V / steady.V_over_U - 1.0) < 1e-6
@@ -211,7 +221,9 @@ def test_stays_steady_below_1e_5_at_24_modes(report):
     stops once below its residual_tol); max|u.n - V n_x| 6.9e-7 at t = 0 and 8.5e-7 after five
     steps of 0.1 R/U; V/U equal to Newton's to 6e-10; modes moved 3.3e-8."""
     res = solve_vesicle(NU, LAM, ca_b=CA_B, n_modes=24, tol=0.5, residual_tol=10.0)
-    assert res.success, res.message
+    assert res.success, res.message       # nearly vacuous at these tolerances: see the fixture
+    assert res.V_over_U == pytest.approx(2 - 4 / 3 * LAM**2, rel=0.01)
+    assert res.dp_plus_R0 == pytest.approx(16 * LAM**6, rel=0.03)
     op = vesicle_operator(res)
     m0 = op.curve(res.modes).modes
     modes, state, info = relax_vesicle(op, m0, 0.5, dt=0.1)

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, example, given, strategies as st
+from hypothesis import example, given, strategies as st
 
 from correlations.estimate import estimate, estimate_dimensionless
 from correlations.registry import METHODS, QUANTITIES, check_output
@@ -634,10 +634,16 @@ def test_bad_bending_capillary_number(ca_b):
         estimate_dimensionless(0.9, 1.25, ca_b)
 
 
-@given(nu=st.floats(allow_nan=True, allow_infinity=True),
-       lam=st.floats(allow_nan=True, allow_infinity=True))
+# any float, with the valid ranges drawn as often as the rest (else nearly every draw is an
+# InvalidParameterError); positive nu below 1e-100 overflows ell_c, the subject of
+# test_tiny_reduced_volume_is_rejected_or_finite, so the nu strategy leaves that interval out
+_ANY_NU = st.one_of(st.just(math.nan), st.floats(max_value=0.0), st.floats(min_value=1e-100),
+                    st.floats(1e-100, 1.0))
+_ANY_LAM = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.floats(0.0, 3.0))
+
+
+@given(nu=_ANY_NU, lam=_ANY_LAM)
 def test_any_float_input_either_works_or_raises_the_documented_error(nu, lam):
-    assume(not 0 < nu < 1e-100)   # overflow of ell_c: see test_tiny_reduced_volume_...
     try:
         e = estimate_dimensionless(nu, lam)
     except CannotPassError as exc:

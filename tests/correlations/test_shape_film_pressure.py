@@ -6,6 +6,7 @@ import warnings
 import numpy as np
 import pytest
 from hypothesis import given, strategies as st
+from strategies import increasing_pairs
 
 from correlations import film, pressure, shape
 from lubrication.asymptotics import dp_plus_near_critical
@@ -76,11 +77,11 @@ def test_class_follows_the_line(nu, f):
     assert cls == ("parachute" if nu < nu_T else "bullet")
 
 
-@given(lo=st.floats(0.01, 3.8), hi=st.floats(0.01, 3.8))
-def test_transition_line_decreases_with_confinement(lo, hi):
-    if hi - lo > 1e-9:
-        assert _quiet(shape.transition_reduced_volume_chen2020, lo) > _quiet(
-            shape.transition_reduced_volume_chen2020, hi)
+@given(pair=increasing_pairs(0.01, 3.8, 1e-9))
+def test_transition_line_decreases_with_confinement(pair):
+    lo, hi = pair
+    assert _quiet(shape.transition_reduced_volume_chen2020, lo) > _quiet(
+        shape.transition_reduced_volume_chen2020, hi)
 
 
 def test_length_is_exact_for_the_sphere_and_reaches_ell_c():
@@ -93,13 +94,12 @@ def test_length_is_exact_for_the_sphere_and_reaches_ell_c():
     assert shape.length_chen2020(0.6, 1.94) == pytest.approx(11.04 * 1.94 / 1.9812, rel=1e-3)
 
 
-@given(nu=st.floats(0.3, 1.0), f1=st.floats(0.05, 0.999), f2=st.floats(0.05, 0.999))
-def test_length_increases_with_confinement(nu, f1, f2):
-    if abs(f1 - f2) > 1e-6:
-        lo, hi = sorted((f1, f2))
-        lam_c = critical_confinement(nu)
-        assert _quiet(shape.length_chen2020, nu, lo * lam_c) < _quiet(
-            shape.length_chen2020, nu, hi * lam_c)
+@given(nu=st.floats(0.3, 1.0), pair=increasing_pairs(0.05, 0.999, 1e-6))
+def test_length_increases_with_confinement(nu, pair):
+    lo, hi = pair
+    lam_c = critical_confinement(nu)
+    assert _quiet(shape.length_chen2020, nu, lo * lam_c) < _quiet(
+        shape.length_chen2020, nu, hi * lam_c)
 
 
 @given(shape_=st.sampled_from([(3,), (2, 4), (1, 5, 2)]))
@@ -222,11 +222,11 @@ def test_film_thickness_is_the_clearance():
     assert _quiet(film.film_thickness_chen2020, 1.0, 0.5) == pytest.approx(0.5, rel=1e-15)
 
 
-@given(c1=st.floats(1e-7, 0.3), c2=st.floats(1e-7, 0.3))
-def test_film_increases_with_capillary_number(c1, c2):
-    if c2 > c1 * (1 + 1e-9):
-        assert _quiet(film.film_from_capillary_chen2020, c1) < _quiet(
-            film.film_from_capillary_chen2020, c2)
+@given(pair=increasing_pairs(1e-7, 0.3, 1e-9, log=True))
+def test_film_increases_with_capillary_number(pair):
+    c1, c2 = pair
+    assert _quiet(film.film_from_capillary_chen2020, c1) < _quiet(
+        film.film_from_capillary_chen2020, c2)
 
 
 @given(shape_=st.sampled_from([(3,), (2, 4), (1, 5, 2)]))
@@ -325,20 +325,20 @@ def test_small_sphere_coupling_matches_the_laws(lam):
         assert pressure.dp_plus_small_sphere_coupling(V) == pytest.approx(16 * lam**6, rel=1e-9)
 
 
-@given(v1=st.floats(1.0, 2.0), v2=st.floats(1.0, 2.0))
-def test_pressure_decreases_with_speed(v1, v2):
-    if v2 > v1 + 1e-9:
-        assert _quiet(pressure.dp_plus_speed_fit_chen2020, v1) > _quiet(
-            pressure.dp_plus_speed_fit_chen2020, v2)
-        assert _quiet(pressure.dp_plus_small_sphere_coupling, v1) > _quiet(
-            pressure.dp_plus_small_sphere_coupling, v2)
+@given(pair=increasing_pairs(1.0, 2.0, 1e-9))
+def test_pressure_decreases_with_speed(pair):
+    v1, v2 = pair
+    assert _quiet(pressure.dp_plus_speed_fit_chen2020, v1) > _quiet(
+        pressure.dp_plus_speed_fit_chen2020, v2)
+    assert _quiet(pressure.dp_plus_small_sphere_coupling, v1) > _quiet(
+        pressure.dp_plus_small_sphere_coupling, v2)
 
 
-@given(d1=st.floats(1e-6, 0.99), d2=st.floats(1e-6, 0.99))
-def test_film_pressure_decreases_with_film(d1, d2):
-    if d2 > d1 * (1 + 1e-9):
-        assert _quiet(pressure.dp_plus_film_chen2020, 1.5, 8.0, d1) > _quiet(
-            pressure.dp_plus_film_chen2020, 1.5, 8.0, d2)
+@given(pair=increasing_pairs(1e-6, 0.99, 1e-9, log=True))
+def test_film_pressure_decreases_with_film(pair):
+    d1, d2 = pair
+    assert _quiet(pressure.dp_plus_film_chen2020, 1.5, 8.0, d1) > _quiet(
+        pressure.dp_plus_film_chen2020, 1.5, 8.0, d2)
 
 
 @given(shape_=st.sampled_from([(3,), (2, 4), (1, 5, 2)]))

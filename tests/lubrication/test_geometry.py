@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 from hypothesis import given, strategies as st
+from strategies import increasing_pairs
 
 from lubrication import geometry as g
 from lubrication.checks import CannotPassError, InvalidParameterError
@@ -61,10 +62,10 @@ def test_nu_c_inverts_lam_c(nu):
     assert g.critical_reduced_volume(g.critical_confinement(nu)) == pytest.approx(nu, rel=1e-12, abs=1e-12)
 
 
-@given(a=st.floats(0.05, 0.999), b=st.floats(0.05, 0.999))
-def test_lam_c_decreases_with_nu(a, b):
-    if a < b:
-        assert g.critical_confinement(a) > g.critical_confinement(b)
+@given(pair=increasing_pairs(0.05, 0.999, 1e-9))
+def test_lam_c_decreases_with_nu(pair):
+    a, b = pair
+    assert g.critical_confinement(a) > g.critical_confinement(b)
 
 
 @given(shape=st.sampled_from([(3,), (2, 4), (1, 5, 2)]))
@@ -105,28 +106,33 @@ def test_chen_2020_statements(report):
 
 
 def test_default_red_cell_geometry(report):
-    """The default red cell (90 fL, 135 um^2): lam_c by numpy.roots, L_c from the volume of a
-    cylinder with hemispherical caps of radius R0/lam_c (in units of the cap radius:
-    ell_c = 2 + (4/3)(lam_c^3 - 1))."""
+    """The default red cell (90 fL, 135 um^2): lam_c by numpy.roots; d_c and L_c by the
+    definition of the critical state, not by the formulas the code uses (d_c = 2 R0/lam_c,
+    L_c = ell_c d_c/2): a cylinder of diameter d_c with hemispherical caps, of total length
+    L_c, has the cell's volume and area."""
     nu, R0 = g.cell_from_volume_area(90.0, 135.0)
     lam_c = report.value("geometry.rbc_lam_c", g.critical_confinement(nu),
                          reference=largest_root(nu), tol="1e-12 rel", source="numpy.roots")
     assert lam_c == pytest.approx(largest_root(nu), rel=1e-12)
-    d_c = report.value("geometry.rbc_d_c", g.critical_diameter_um(nu, R0),
-                       reference=2 * R0 / lam_c, tol="1e-13 rel", source="d_c = 2 R0/lam_c")
-    assert d_c == pytest.approx(2 * R0 / lam_c, rel=1e-13)
-    L_ref = (2 + 4 / 3 * (largest_root(nu) ** 3 - 1)) * R0 / largest_root(nu)
-    L_c = report.value("geometry.rbc_L_c", g.critical_length_um(nu, R0), reference=L_ref,
-                       tol="1e-12 rel", source="spherocylinder of volume 4 pi R0^3/3")
-    assert L_c == pytest.approx(L_ref, rel=1e-12)
+    a = report.value("geometry.rbc_d_c", g.critical_diameter_um(nu, R0), reference=None,
+                     tol="1e-12 rel", source="spherocylinder of the cell's volume and area"
+                     ) / 2
+    L_c = report.value("geometry.rbc_L_c", g.critical_length_um(nu, R0), reference=None,
+                       tol="1e-12 rel", source="spherocylinder of the cell's volume and area")
+    assert math.pi * a**2 * (L_c - 2 * a) + 4 / 3 * math.pi * a**3 == pytest.approx(90.0,
+                                                                                    rel=1e-12)
+    assert 2 * math.pi * a * (L_c - 2 * a) + 4 * math.pi * a**2 == pytest.approx(135.0,
+                                                                                 rel=1e-12)
 
 
 def test_cell_geometry_against_direct_formulas(report):
+    """nu = 6 sqrt(pi) V/A^(3/2) (the usual definition, e.g. Seifert 1997) and R0 the radius of
+    the sphere of volume V, against the code's (R0/R_A)^3 and cube root."""
     nu, R0 = g.cell_from_volume_area(90.0, 135.0)
-    RA = math.sqrt(135.0 / (4 * math.pi))
-    assert R0 == pytest.approx((3 * 90.0 / (4 * math.pi)) ** (1 / 3), rel=1e-14)
-    assert report.value("geometry.rbc_nu", nu, reference=(R0 / RA) ** 3, tol="1e-13 rel",
-                        source="(R0/RA)^3") == pytest.approx((R0 / RA) ** 3, rel=1e-13)
+    assert 4 / 3 * math.pi * R0**3 == pytest.approx(90.0, rel=1e-14)
+    ref = 6 * math.sqrt(math.pi) * 90.0 / 135.0**1.5
+    assert report.value("geometry.rbc_nu", nu, reference=ref, tol="1e-13 rel",
+                        source="6 sqrt(pi) V/A^(3/2)") == pytest.approx(ref, rel=1e-13)
     assert g.confinement_from_diameter(R0, 4.0) == pytest.approx(R0 / 2.0, rel=1e-15)
 
 
