@@ -127,7 +127,8 @@ def test_a_fresh_record_may_not_shadow_a_committed_one_of_another_test(tmp_path)
 def test_a_benchmark_not_measured_renders_its_fallback_text(data_dir):
     """``bench_*.json`` placeholders may carry ``|text``: a missing file or entry gives the text
     and is counted as not measured; a present value is formatted and counted as stored."""
-    (data_dir / "bench_speed.json").write_text(json.dumps({"cases": {"short": {"median_s": 3.456}}}))
+    stored = {"cases": {"short": {"median_s": 3.456}}}
+    (data_dir / "bench_speed.json").write_text(json.dumps(stored))
     template = ("{{json:bench_speed.json#cases/short/median_s:.1f|not measured}} / "
                 "{{json:bench_speed.json#cases/long/median_s:.1f|not measured}} / "
                 "{{json:bench_other.json#median_s:.2f|not measured}}\n{{stats}}")
