@@ -11,7 +11,8 @@ previous file intact.
 Timings depend on the machine and on what else runs on it: :func:`machine` records the load
 average before and after the run and states "machine loaded" when other processes were
 running at the start (1-minute load average of at least :data:`LOADED` before the clock
-starts).
+starts). The load average decays over minutes, so right after another benchmark it still
+counts that one: "loaded" is then an overstatement, never an understatement.
 """
 
 from __future__ import annotations
