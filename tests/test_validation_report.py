@@ -122,3 +122,22 @@ def test_a_fresh_record_may_not_shadow_a_committed_one_of_another_test(tmp_path)
     vr.save_records(tmp_path / "run", fast)
     with pytest.raises(ValueError, match="sphere.order6"):
         vr.load_records(tmp_path / "run", slow_file)
+
+
+def test_a_benchmark_not_measured_renders_its_fallback_text(data_dir):
+    """``bench_*.json`` placeholders may carry ``|text``: a missing file or entry gives the text
+    and is counted as not measured; a present value is formatted and counted as stored."""
+    stored = {"cases": {"short": {"median_s": 3.456}}}
+    (data_dir / "bench_speed.json").write_text(json.dumps(stored))
+    template = ("{{json:bench_speed.json#cases/short/median_s:.1f|not measured}} / "
+                "{{json:bench_speed.json#cases/long/median_s:.1f|not measured}} / "
+                "{{json:bench_other.json#median_s:.2f|not measured}}\n{{stats}}")
+    text, counts = vr.render(template, {}, data_dir)
+    assert text.splitlines()[0] == "3.5 / not measured / not measured"
+    assert counts["stored"] == 1 and counts["not_measured"] == 2
+    assert "(2 benchmark values not measured)" in text
+
+
+def test_a_fallback_text_is_refused_outside_the_benchmark_files(data_dir):
+    with pytest.raises(ValueError, match="only for the benchmark files"):
+        vr.render("{{json:cases.json#cases/7/V:.3f|not measured}}", {}, data_dir)

@@ -30,9 +30,15 @@ Placeholders
     fields ``@test``, ``@tol``, ``@kind`` where the matched records agree;
     ``{{json:<file in docs/data>#a/b/0/c:spec}}``: a value a committed script stored
     (a last part ``len()`` gives the length of a stored list);
+    ``{{json:bench_<name>.json#a/b:spec|not measured}}``: the same with a fallback text, for the
+    benchmark files only (``docs/data/bench_*.json``, written by ``tests/benchmarks/``): timings
+    are not reproducible by the tests, and a benchmark not run on this checkout (no file, or no
+    such entry) renders as the text after ``|`` instead of failing the report; counted as
+    "not measured" by ``{{stats}}``. Elsewhere a ``|`` fallback is an error;
     ``{{stats}}``: the counts of the report (generated values by kind, and the numbers still
     typed in sections marked ``<!-- not yet generated -->``).
-A placeholder without a record is an error naming it; a stale number is never kept.
+A placeholder without a record is an error naming it (but for the benchmark fallback above); a
+stale number is never kept.
 """
 
 from __future__ import annotations
@@ -54,6 +60,7 @@ RECORDS_ENV = "VALIDATION_RECORDS"
 KINDS = ("independent", "regression")
 FIELDS = ("test", "tol", "kind", "reference", "source")
 NOT_YET = "<!-- not yet generated -->"
+BENCHMARK_FILES = "bench_*.json"      # the only stored files whose placeholders may fall back
 
 PLACEHOLDER = re.compile(
     r"\{\{\s*((?:json:|max:|min:)?[^{}:@\s]+)(?:@(\w+))?(?::([^{}]*))?\s*\}\}")
@@ -222,12 +229,31 @@ def render(template: str, records: dict, data_dir: Path = DATA) -> tuple[str, di
     """Fill ``template`` from ``records`` and the JSON files in ``data_dir``.
 
     Returns the text and the counts ``{"values", "independent", "regression", "stored",
-    "untraced", "unused"}``. Raises :class:`MissingRecord` naming the first placeholder
-    without a record.
+    "not_measured", "untraced", "unused"}``. Raises :class:`MissingRecord` naming the first
+    placeholder without a record (a benchmark placeholder with a fallback gives its text).
     """
     cache: dict = {}
     used: set = set()
-    counts = {"values": 0, "independent": 0, "regression": 0, "stored": 0}
+    counts = {"values": 0, "independent": 0, "regression": 0, "stored": 0, "not_measured": 0}
+
+    def stored(name: str, spec: str) -> str:
+        spec, fallback, text = spec.partition("|")
+        file = name[5:].partition("#")[0]
+        if fallback and not fnmatch.fnmatchcase(file, BENCHMARK_FILES):
+            raise ValueError(f"placeholder {{{{{name}:{spec}|{text}}}}}: a fallback text is "
+                             f"allowed only for the benchmark files {BENCHMARK_FILES}")
+        try:
+            value = _json_value(name[5:], data_dir, cache)
+            out = _format(value, spec, name)
+        except MissingRecord:
+            if not fallback:
+                raise
+            counts["not_measured"] += 1
+            return text
+        if isinstance(value, (int, float)) and not isinstance(value, bool):   # not a label
+            counts["values"] += 1
+            counts["stored"] += 1
+        return out
 
     def fill(match):
         name, field, spec = match.group(1), match.group(2), match.group(3) or ""
@@ -236,11 +262,7 @@ def render(template: str, records: dict, data_dir: Path = DATA) -> tuple[str, di
         if name.startswith("json:"):
             if field:
                 raise ValueError(f"placeholder {match.group(0)}: stored values have no fields")
-            value = _json_value(name[5:], data_dir, cache)
-            if isinstance(value, (int, float)) and not isinstance(value, bool):   # not a label
-                counts["values"] += 1
-                counts["stored"] += 1
-            return _format(value, spec, name)
+            return stored(name, spec)
         if name.startswith(("max:", "min:")):
             rec = _aggregate(name, records)
             used.update(k for k in records if fnmatch.fnmatchcase(k, name[4:]))
@@ -265,8 +287,10 @@ def render(template: str, records: dict, data_dir: Path = DATA) -> tuple[str, di
     counts["unused"] = sorted(set(records) - used)
     stats = (f"{counts['values']} numbers generated: {counts['independent']} asserted against "
              f"an independent reference, {counts['regression']} against our own regression "
-             f"values, {counts['stored']} stored by a committed script in `docs/data/`; "
-             f"{counts['untraced']} numbers still typed by hand in sections marked "
+             f"values, {counts['stored']} stored by a committed script in `docs/data/`"
+             + (f" ({counts['not_measured']} benchmark values not measured)"
+                if counts["not_measured"] else "")
+             + f"; {counts['untraced']} numbers still typed by hand in sections marked "
              f"not yet generated")
     return text.replace("{{stats}}", stats), counts
 
@@ -292,7 +316,8 @@ def main(argv=None) -> int:
         print(f"warning: records not in the template: {', '.join(counts['unused'])}",
               file=sys.stderr)
     print(f"{counts['values']} values ({counts['independent']} independent, "
-          f"{counts['regression']} regression, {counts['stored']} stored); "
+          f"{counts['regression']} regression, {counts['stored']} stored, "
+          f"{counts['not_measured']} benchmark values not measured); "
           f"{counts['untraced']} numbers not yet generated")
     if args.command == "check":
         if OUTPUT.read_text() != text:

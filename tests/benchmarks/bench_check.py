@@ -8,12 +8,14 @@ CSV file in this process (the map's query cache cleared before each run; the map
 is read once, as in one command), and the command line ``vesicle-tube check FILE --json``
 end to end (process start included). The map is the shipped one, or the one packed from the
 committed build folder when none is shipped. Not a test: timings depend on the machine. Run
-with ``python tests/benchmarks/bench_check.py``.
+with ``python tests/benchmarks/bench_check.py``; the measurements, with the machine they were
+taken on, go to ``docs/data/bench_check.json`` (``tests/benchmarks/bench_store.py``).
 """
 
 from __future__ import annotations
 
 import csv
+import os
 import random
 import statistics
 import subprocess
@@ -56,8 +58,19 @@ def make_rows(m, n: int = ROWS, seed: int = 1) -> list[dict]:
     return rows
 
 
+def _relative(path) -> str:
+    """``path`` relative to the repository if it lies inside it (stored files name no home)."""
+    root = Path(__file__).resolve().parents[2]
+    try:
+        return str(Path(path).resolve().relative_to(root))
+    except ValueError:
+        return str(path)
+
+
 def main() -> int:
+    from bench_store import machine, store
     from correlations import check, registry
+    load_before = os.getloadavg()
     m = solution_map()
     folder = Path(tempfile.mkdtemp(prefix="bench-check-"))
     path = folder / "rows.csv"
@@ -85,6 +98,14 @@ def main() -> int:
     print(f"  vesicle-tube check FILE --json, end to end: min {min(wall):.2f} s, median "
           f"{statistics.median(wall):.2f} s over {len(wall)} runs (target <= {TARGET_S:g} s): "
           f"{'ok' if ok else 'SLOW'}")
+    store("check", {
+        "parameters": {"rows": ROWS, "seed": 1, "map": _relative(m.source),
+                       "in_process_runs": len(times), "end_to_end_runs": len(wall)},
+        "checks": checks, "verdicts": report.counts,
+        "in_process_s": {"runs": times, "min": min(times), "median": statistics.median(times)},
+        "end_to_end_s": {"runs": wall, "min": min(wall), "median": statistics.median(wall),
+                         "target": TARGET_S},
+        "machine": machine(load_before)})
     return 0 if ok else 1
 
 

@@ -4,11 +4,14 @@ Cells: V/U and ℓ = L/R of the solution map itself at 20 random (ν, λ/λc) in
 0.6-0.98, λ/λc 0.2-0.98, Ca_B = 50), turned into V [mm/s], L [µm] for a 6 µm tube at U = 1 mm/s,
 then inferred with ``infer_cell`` (default 2 % errors, linearisation) in this process; the map
 file is read once before timing, as in one command. Also timed: one cell with ``samples=200``.
-Not a test: timings depend on the machine. Run with ``python tests/benchmarks/bench_infer.py``.
+Not a test: timings depend on the machine. Run with ``python tests/benchmarks/bench_infer.py``;
+the measurements, with the machine they were taken on, go to ``docs/data/bench_infer.json``
+(``tests/benchmarks/bench_store.py``).
 """
 
 from __future__ import annotations
 
+import os
 import random
 import statistics
 import time
@@ -31,8 +34,10 @@ def cells(m, n: int = CELLS, seed: int = 1) -> list[dict]:
 
 
 def main() -> None:
+    from bench_store import machine, store
     from correlations.infer import infer_cell
     from correlations.solution_map import load_map
+    load_before = os.getloadavg()
     m = load_map()
     times, consistent = [], 0
     for c in cells(m):
@@ -45,7 +50,15 @@ def main() -> None:
     t = time.perf_counter()
     infer_cell(diameter_um=DIAMETER_UM, u_mm_s=U_MM_S, samples=200, solution_map=m,
                **cells(m, 1)[0])
-    print(f"infer_cell, 200 samples, 1 cell: {time.perf_counter() - t:.2f} s")
+    sampled = time.perf_counter() - t
+    print(f"infer_cell, 200 samples, 1 cell: {sampled:.2f} s")
+    store("infer", {
+        "parameters": {"cells": CELLS, "seed": 1, "ca_b": 50.0, "diameter_um": DIAMETER_UM,
+                       "u_mm_s": U_MM_S, "uncertainty": "linearised, default 2 % errors"},
+        "per_cell_s": {"runs": times, "median": statistics.median(times), "max": max(times),
+                       "target": TARGET_S},
+        "consistent": consistent, "samples_200_one_cell_s": sampled,
+        "machine": machine(load_before)})
 
 
 if __name__ == "__main__":

@@ -7,13 +7,16 @@ the map file, separately) and the cold start of ``vesicle-tube estimate`` agains
 The pack/query map is synthetic (a smooth function stored as converged points on every node of
 correlations.map_build.DEFAULT_GRID), so no solver runs. The estimate timings use whatever map is
 shipped at correlations/data/solution_map.json (skipped without one). Run with
-``python tests/benchmarks/bench_solution_map.py`` (``make benchmark``).
+``python tests/benchmarks/bench_solution_map.py`` (``make benchmark``); the measurements, with
+the machine they were taken on, go to ``docs/data/bench_solution_map.json``
+(``tests/benchmarks/bench_store.py``).
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import random
 import statistics
 import subprocess
@@ -98,15 +101,24 @@ def bench_cold_start(repeat: int = 5) -> tuple[list[float], list[float]]:
     return cli, bare
 
 
-def report_estimate() -> bool:
-    """Print the estimate and cold-start timings; True when both targets are met."""
+def _stats(times: list[float]) -> dict:
+    return {"runs": times, "min": min(times), "median": statistics.median(times),
+            "max": max(times), "n": len(times)}
+
+
+def report_estimate(out: dict) -> bool:
+    """Print the estimate and cold-start timings and put them in ``out`` (``estimate``: the
+    ``first_call_ms`` and, per tube diameter, the repeated calls [ms]; ``cold_start``: the
+    command and the bare import [s], their median ratio); True when both targets are met."""
     from correlations.solution_map import DEFAULT_MAP
     if not DEFAULT_MAP.exists():
         print(f"estimate: skipped (no map shipped at {DEFAULT_MAP})")
         return True
     runs = bench_estimate()
-    print(f"estimate() from the shipped map (V/U at the RBC default: "
-          f"{runs.pop('_first_method') or 'no value'}; target <= {ESTIMATE_TARGET_MS:g} ms):")
+    method = runs.pop("_first_method") or "no value"
+    print(f"estimate() from the shipped map (V/U at the RBC default: {method}; "
+          f"target <= {ESTIMATE_TARGET_MS:g} ms):")
+    est = {"target_ms": ESTIMATE_TARGET_MS, "rbc_default_method": method}
     ok = True
     for name, times in runs.items():
         best, med = min(times), statistics.median(times)
@@ -114,17 +126,26 @@ def report_estimate() -> bool:
         ok &= fine
         print(f"  {name}: min {best:.1f} ms, median {med:.1f} ms over {len(times)}: "
               f"{'ok' if fine else 'SLOW'}")
+        if name.startswith("first call"):
+            est["first_call_ms"] = times[0]
+        else:
+            est[f"d_{name.split()[2]}_um_ms"] = {**_stats(times), "label": name}
     cli, bare = bench_cold_start()
     ratio = statistics.median(cli) / statistics.median(bare)
     print(f"cold start: vesicle-tube estimate median {statistics.median(cli):.3f} s (min "
           f"{min(cli):.3f}), python -c 'import numpy, scipy' median {statistics.median(bare):.3f} "
           f"s (min {min(bare):.3f}), ratio {ratio:.2f} (target <= {COLD_START_TARGET_RATIO:g}): "
           f"{'ok' if ratio <= COLD_START_TARGET_RATIO else 'SLOW'}")
+    out["estimate"] = est
+    out["cold_start"] = {"cli_s": _stats(cli), "bare_import_s": _stats(bare), "ratio": ratio,
+                         "target_ratio": COLD_START_TARGET_RATIO}
     return ok and ratio <= COLD_START_TARGET_RATIO
 
 
 def main() -> int:
+    from bench_store import machine, store
     from correlations.solution_map import load_map, pack_map, query_map
+    load_before = os.getloadavg()
     folder = Path(tempfile.mkdtemp(prefix="bench-map-"))
     make_folder(folder)
     t0 = time.perf_counter()
@@ -143,7 +164,14 @@ def main() -> int:
     print(f"points {len(m.columns['nu'])}, pack {pack_s:.1f} s, file {path.stat().st_size / 1e3:.0f} kB")
     print(f"query: median {med:.1f} ms, max {worst:.1f} ms over {len(times)} random queries "
           f"(target <= {QUERY_TARGET_MS:g} ms): {'ok' if worst <= QUERY_TARGET_MS else 'SLOW'}")
-    estimate_ok = report_estimate()
+    out = {"parameters": {"queries": len(times), "query_seed": 1, "estimate_repeat": 20,
+                          "cold_start_repeat": 5, "map": "synthetic, correlations.map_build."
+                          "DEFAULT_GRID (pack and query); shipped map (estimate)"},
+           "points": len(m.columns["nu"]), "pack_s": pack_s,
+           "file_kB": path.stat().st_size / 1e3,
+           "query_ms": {**_stats(times), "target": QUERY_TARGET_MS}}
+    estimate_ok = report_estimate(out)
+    store("solution_map", {**out, "machine": machine(load_before)})
     return 0 if worst <= QUERY_TARGET_MS and estimate_ok else 1
 
 

@@ -8,6 +8,9 @@ time, so that its peak resident memory (``ru_maxrss``) is its own. The table giv
 and median wall time of the runs, the number of boundary-integral solves (BEM evaluations,
 continuation rungs included; the same in every run) beside the 10^4-10^5 semi-implicit time
 steps of Chen et al. 2020 (one BIE solve each), and the solution with its error estimate.
+Each case run is stored under ``cases/<case>`` of ``docs/data/bench_vesicle.json`` with its
+parameters, runs and the machine (``tests/benchmarks/bench_store.py``); cases run separately
+accumulate there, a new run of a case replaces only that case.
 
 Cases and targets (2-core machine, default options, Ca_B = 50):
 
@@ -22,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -66,7 +70,7 @@ def main() -> None:
     ap.add_argument("--cases", default="short,rbc,long,sweep",
                     help="comma-separated subset of " + ", ".join(CASES))
     ap.add_argument("--repeats", type=int, default=3, help="runs per case (default 3)")
-    ap.add_argument("--json", help="write the rows to this JSON file")
+    ap.add_argument("--json", help="also write the rows to this JSON file")
     args = ap.parse_args()
     names = [c.strip() for c in args.cases.split(",") if c.strip()]
     unknown = [c for c in names if c not in CASES]
@@ -76,8 +80,10 @@ def main() -> None:
     print(f"{'case':>6} {'nu':>5} {'lam/lc':>6} {'min s':>7} {'median s':>8} {'target':>6} "
           f"{'BIE':>6} {'conv':>5} {'modes':>5} {'V/U':>10} {'dp+R0':>9} {'g_max':>8} "
           f"{'residual':>8} {'peak MB':>7}", flush=True)
+    from bench_store import machine, store
     for name in names:
         nu, lam, target = CASES[name]
+        load_before = os.getloadavg()
         runs = [run_case(nu, lam) for _ in range(args.repeats)]
         walls = [r["wall_s"] for r in runs]
         r = runs[-1]
@@ -91,6 +97,8 @@ def main() -> None:
               f"{r['residual']:8.1e} {r['peak_rss_mb']:7.0f}", flush=True)
         for m in r["messages"]:
             print(f"       not converged: {m}")
+        store("vesicle", {"cases": {name: {**row, "repeats": args.repeats, "ca_b": 50.0}},
+                          "machine": machine(load_before)}, merge="cases")
     print("BIE: boundary-integral solves (Chen et al. 2020: 1e4-1e5 time steps, one each); "
           "sweep row: totals over its 10 points, solution of the last one")
     if args.json:
