@@ -65,7 +65,10 @@ bracketing pair's; without such a node the interpolation on that axis is linear.
 through a bullet–parachute branch change (at small λ/λc the low-ν vesicles are elongated
 bullets at Ca_B = 15 and parachutes at Ca_B = 50) or through a BEM–lubrication change of method
 is worse than a line (measured on the off-grid points of tests/benchmarks/map_offgrid.py: with
-the third node taken across such changes V/U was off by up to 1.75 % and Δp⁺ by 30 %). A query
+the third node taken across such changes V/U was off by up to 1.75 % and Δp⁺ by 30 %).
+Between such nodes the elongated and the parachute states can both be steady
+(tests/benchmarks/map_bistability.py): each node holds the branch its build reached, and the
+query's shape class is None where the nodes around it differ. A query
 on a grid node on some axis takes that node's values on that axis exactly.
 
 Error bar
@@ -80,12 +83,12 @@ LOO is an extrapolation), plus the weighted errors of the inner axes, and divide
 :data:`LOO_RATIO` = 2. Removing a node doubles the local spacing; interpolation of degree p
 has an error ∝ h^(p+1), so where the data are smooth LOO overestimates the full grid's error
 4× (linear stencils) to 8× (quadratic). The map's data are not everywhere that smooth (branch
-changes, a coarse Ca_B axis), so only the factor 2 is taken out. Measured: on the off-grid
-points of tests/benchmarks/map_offgrid.py the bar covers the error at 96–100 % of them, and on
-a map with every other ν node, or some λ/λc nodes, left out (tests/benchmarks/map_error_bars.py,
-where LOO spans four grid steps) at 72–94 %; the numbers are in docs/validation.md (solution
-map). Unscaled, the bar was 25–35× the off-grid error (median); divided by 4, it covered only
-52–88 % on the coarsened map.
+changes, a coarse Ca_B axis), so only the factor 2 is taken out. Measured on the off-grid
+points of tests/benchmarks/map_offgrid.py (where the bar is pessimistic, several times the
+error in the median) and on maps with every other ν node, or some λ/λc nodes, left out
+(tests/benchmarks/map_error_bars.py, where LOO spans four grid steps and the bar covers less);
+the coverage numbers of both are in docs/validation.md (solution map). Dividing by 4 instead
+lowered the coverage on the coarsened maps to about half of the points.
 ``solver_error``: the solver's own error estimate (BEM refinement
 pair |fine − coarse| for V/U, Δp⁺ and γ_max; none otherwise) propagated with the interpolation
 weights; None when a neighbour has none. ``model_error``: see the rule above (and the Ca_B clamp
