@@ -215,11 +215,14 @@ def add_map_parser(subparsers) -> None:
     """Add ``map build``, ``map pack`` and ``map query`` to the subcommands."""
     from lubrication.cli_contract import Parser, finite_float, positive_int
 
+    from .cli import add_map_option
+
     p = subparsers.add_parser("map", help="precomputed solution map: build, pack, query")
     sub = p.add_subparsers(dest="map_command", required=True, parser_class=Parser)
 
     b = sub.add_parser("build", help="solve the grid of the map into a build folder "
                        "(resumes a stopped build)")
+    # option lists alike in shape only with the figures command's (a deliberate repeat)
     b.add_argument("--out", required=True, metavar="DIR",
                    help="build folder: build.json, one JSON file per point, solution_map.json")
     b.add_argument("--workers", type=positive_int,
@@ -273,7 +276,6 @@ def add_map_parser(subparsers) -> None:
     q.add_argument("--lam-ratio", type=finite_float, help="lam/lam_c, 0 < r < 1 [-]")
     q.add_argument("--ca-b", type=finite_float, required=True,
                    help="bending capillary number eta U R0^2/kappa > 0 [-]")
-    q.add_argument("--map", metavar="FILE",
-                   help="packed map (default: the shipped correlations/data/solution_map.json)")
+    add_map_option(q, "packed map")
     q.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     q.set_defaults(func=cmd_map_query)
