@@ -140,7 +140,7 @@ def write_report(report, path) -> Path:
 
 def add_check_parser(subparsers) -> None:
     """Add ``check`` to the subcommands."""
-    from .cli import add_map_option
+    from lubrication.cli_contract import add_map_option
     p = subparsers.add_parser(
         "check", help="check results (CSV or JSON rows: your V/U, dp+, length, film) against "
                       "the physics and our references")

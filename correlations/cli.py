@@ -310,12 +310,6 @@ def cmd_fahraeus(args) -> dict:
 
 # --------------------------------------------------------------------------- parser
 
-def add_map_option(parser, what: str = "packed solution map") -> None:
-    """``--map FILE``: ``what``, in place of the shipped map (``check``, ``infer``, ``figures``)."""
-    parser.add_argument("--map", metavar="FILE",
-                        help=f"{what} (default: the shipped correlations/data/solution_map.json)")
-
-
 def build_parser() -> argparse.ArgumentParser:
     from .estimate import PHYSICAL_BOUNDS, RBC_DEFAULTS
     from .registry import SOLVERS

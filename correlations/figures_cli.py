@@ -83,7 +83,7 @@ def add_figures_parser(subparsers) -> None:
     """Add ``figures`` to the subcommands."""
     from lubrication.cli_contract import finite_float
 
-    from .cli import add_map_option
+    from lubrication.cli_contract import add_map_option
     from .figures import FIGURES
     p = subparsers.add_parser(
         "figures", help="regenerate the figures of Chen et al. (2020) from our solvers and "

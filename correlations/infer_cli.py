@@ -67,7 +67,7 @@ def add_infer_parser(subparsers) -> None:
     """Add ``infer`` to the subcommands."""
     from lubrication.cli_contract import finite_float, positive_int
 
-    from .cli import add_map_option
+    from lubrication.cli_contract import add_map_option
     p = subparsers.add_parser(
         "infer", help="infer a cell (nu, lam, volume, area, film, dp+, tension) from its "
                       "measured speed and length in a tube, with uncertainties")

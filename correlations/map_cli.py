@@ -215,7 +215,7 @@ def add_map_parser(subparsers) -> None:
     """Add ``map build``, ``map pack`` and ``map query`` to the subcommands."""
     from lubrication.cli_contract import Parser, finite_float, positive_int
 
-    from .cli import add_map_option
+    from lubrication.cli_contract import add_map_option
 
     p = subparsers.add_parser("map", help="precomputed solution map: build, pack, query")
     sub = p.add_subparsers(dest="map_command", required=True, parser_class=Parser)

@@ -39,7 +39,8 @@ __all__ = ["EXIT_OK", "EXIT_NOT_CONVERGED", "EXIT_INVALID", "EXIT_INTERRUPTED",
            "EXIT_BROKEN_PIPE", "EXIT_CHECK_FAILED", "UsageError", "Parser", "format_rows",
            "format_value", "format_value_error", "REPORT_FORMATS", "check_report_path",
            "check_output_dir", "check_plot_path", "save_plot", "non_finite_keys", "dump_json",
-           "finite_float", "positive_int", "add_max_time_option", "one_line", "options_named"]
+           "finite_float", "positive_int", "add_max_time_option", "add_map_option", "one_line",
+           "options_named"]
 
 
 class UsageError(Exception):
@@ -81,6 +82,13 @@ def options_named(options: dict, args=None):
 
 
 # --------------------------------------------------------------------------- option types
+
+def add_map_option(parser, what: str = "packed solution map") -> None:
+    """``--map FILE``: ``what``, in place of the shipped map (``check``, ``infer``, ``figures``,
+    ``map query``)."""
+    parser.add_argument("--map", metavar="FILE",
+                        help=f"{what} (default: the shipped correlations/data/solution_map.json)")
+
 
 def finite_float(text: str) -> float:
     """argparse type: a finite real number (``nan``, ``inf`` and overflow are refused here, so
