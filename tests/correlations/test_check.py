@@ -26,7 +26,7 @@ from cli_helpers import strict_json
 from correlations.check import (DEFAULT_CA_B, MAP_UNKNOWN_SOLVER_RTOL, WARN_FACTOR, InputError,
                                 Verdict, assert_consistent, check_results, film_upper_bound,
                                 length_lower_bound, parse_row, read_rows)
-from correlations.solution_map import DEFAULT_MAP, load_map, pack_map, read_points
+from correlations.solution_map import DEFAULT_MAP, load_map, pack_map, query_map, read_points
 from lubrication.geometry import critical_confinement
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -121,20 +121,32 @@ def test_every_converged_map_point_passes_without_false_alarms(build_map, shippe
 
 @pytest.mark.slow
 def test_off_grid_lubrication_solutions_pass_against_the_interpolated_map(shipped):
-    """Solutions of the lubrication solver between the map's lam/lam_c nodes (interpolation
-    error and model error in the tolerance): 0 failures, 0 warnings."""
+    """Solutions of the lubrication solver between the map's lam/lam_c nodes where the map
+    answers from lubrication points (interpolation error and model error in the tolerance):
+    0 failures, 0 warnings. Where the map answers from BEM points (its rule prefers them), the
+    same solutions lie below the map's dp+ by the model difference of lubrication
+    (tests/benchmarks/lubrication_overlap.py: lubrication's dp+ is low at delta = 0.02-0.1),
+    which the check rightly does not pass as agreement; those points are checked for that sign."""
     from lubrication.solve import solve_lubrication
-    rows = []
+    rows, below = [], []
     for nu in (0.62, 0.77, 0.93):
         for ratio in (0.935, 0.965, 0.985, 0.9975):
             lam = ratio * float(critical_confinement(nu))
             sol = solve_lubrication(nu, lam, ca_b=DEFAULT_CA_B)
             assert sol.success, sol.message
-            rows.append({"name": f"lubrication {nu} {ratio}", "nu": nu, "lam": lam,
-                         "ca_b": DEFAULT_CA_B, "V_over_U": sol.V_over_U,
-                         "dp_plus_R": sol.dp_plus_R, "ell": sol.ell, "film_min": sol.film_min})
+            ref = query_map(nu, ratio, DEFAULT_CA_B, map=shipped).quantities["dp_plus_R0"]
+            methods = ref.methods
+            if methods == ("lubrication",):
+                rows.append({"name": f"lubrication {nu} {ratio}", "nu": nu, "lam": lam,
+                             "ca_b": DEFAULT_CA_B, "V_over_U": sol.V_over_U,
+                             "dp_plus_R": sol.dp_plus_R, "ell": sol.ell,
+                             "film_min": sol.film_min})
+            elif methods == ("bem",):
+                below.append((nu, ratio, sol.dp_plus_R0, ref.value))
+    assert len(rows) >= 6 and len(below) >= 3
     report = check_results(rows, solution_map=shipped, bem=False)
     assert report.counts["pass"] == len(rows), _bad(report)
+    assert all(lub < bem for _, _, lub, bem in below), below
 
 
 def test_the_asymptotic_references_pass_our_bem_and_lubrication_points(build_map):
