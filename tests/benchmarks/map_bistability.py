@@ -24,13 +24,14 @@ from pathlib import Path
 
 from bem.shape import SpectralCurve
 from bem.vesicle import solve_vesicle
+from correlations.map_build import DEFAULT_GRID
 from correlations.solution_map import point_filename, read_point
 from lubrication.geometry import critical_confinement
 from lubrication.io import write_json
 
 BUILD = Path(__file__).resolve().parents[2] / "correlations" / "data" / "solution_map_build"
 KEYS = ("V_over_U", "dp_plus_R0", "ell", "film_min", "shape_class", "curvature_rear")
-CA_B = (5.0, 9.0, 15.0, 25.0, 50.0, 150.0, 500.0)
+CA_B = tuple(sorted(DEFAULT_GRID["ca_b"]))      # the shipped map's Ca_B nodes
 
 
 def _curve(shape: dict, volume: float) -> SpectralCurve:
