@@ -121,7 +121,9 @@ class DropDiscretisation:
     on the drop; the wall panel length near the drop follows the drop panels
     (``wall_refinement`` scales it); ``quad_tol`` is the accuracy of the singular and
     near-singular panel integrals; ``tube_tol`` sets the meshed wall length from the
-    exp(-4.47 x/R) decay of the disturbance.
+    exp(-4.47 x/R) decay of the disturbance. ``wall_body_length`` (None: off) scales the
+    wall panels beside a body longer than it by wall_body_length/extent
+    (:func:`_wall_and_inlet`).
     """
 
     n_modes: int
@@ -130,6 +132,7 @@ class DropDiscretisation:
     wall_refinement: float = 1.0
     quad_tol: float = DEFAULT_TOL
     tube_tol: float = 1e-12
+    wall_body_length: float | None = None
 
 
 def _drop_breaks(curve: SpectralCurve, n_panels: int) -> np.ndarray:
@@ -146,13 +149,21 @@ def _wall_and_inlet(curve: SpectralCurve, disc: DropDiscretisation, p: int):
     half-length of the meshed tube.
 
     :func:`bem.geometry.tube_panels` with the refinement n_panels/8 * wall_refinement (at least
-    0.5 wall_refinement): the finest wall panels over the drop's extent plus 0.2 R.
+    0.5 wall_refinement): the finest wall panels over the drop's extent plus 0.2 R. The rule
+    follows the body's panel count, which for a compact body measures its resolution; a long
+    body's panels spread over its length (a long vesicle's ladder starts at ~6 modes per R of
+    length), so with ``disc.wall_body_length`` = L the panels beside a body of axial extent
+    ℓ > L are ℓ/L times longer (their growth toward the tube ends is kept).
     """
     xr, xf = curve.extent()
     half = wall_half_length(max(-xr, xf), disc.tube_tol)
+    refinement = max(disc.n_panels / 8.0, 0.5) * disc.wall_refinement
+    flat_refinement = refinement
+    if disc.wall_body_length is not None and xf - xr > disc.wall_body_length:
+        flat_refinement = refinement * disc.wall_body_length / (xf - xr)
     wall, inlet = tube_panels(gap=1.0 - curve.max_radius(), half_length=half,
-                              refinement=max(disc.n_panels / 8.0, 0.5) * disc.wall_refinement,
-                              flat=(xr - 0.2, xf + 0.2), p=p)
+                              refinement=refinement, flat=(xr - 0.2, xf + 0.2), p=p,
+                              flat_refinement=flat_refinement)
     return wall, inlet, half
 
 

@@ -97,7 +97,8 @@ class TubeGeometry:
 
 def tube_panels(*, gap: float, half_length: float, refinement: float = 1.0,
                 flat: tuple[float, float] = (0.0, 0.0),
-                p: int = DEFAULT_ORDER) -> tuple[PanelSet, PanelSet]:
+                p: int = DEFAULT_ORDER,
+                flat_refinement: float | None = None) -> tuple[PanelSet, PanelSet]:
     """Panels of the wall r = 1, -half_length <= x <= half_length, and of the inlet disc
     x = -half_length, for a body leaving the wall gap ``gap``.
 
@@ -105,10 +106,14 @@ def tube_panels(*, gap: float, half_length: float, refinement: float = 1.0,
     ``flat`` = (x_lo, x_hi) (0 inside it), h0 = clip(sqrt(gap)/2, 0.03, 0.5)/refinement (the
     lubrication length sqrt(gap a) sets the scale of wall tractions near the body) and kappa =
     0.5/refinement; the inlet disc has max(2, 3 refinement) panels graded toward the corner
-    with the wall. Returns (wall, inlet).
+    with the wall. ``flat_refinement`` (default ``refinement``) replaces ``refinement`` in h0
+    only: the panels beside the body, not their growth toward the tube ends (which sets the
+    Poiseuille wall shear there). Returns (wall, inlet).
     """
     refinement = float(check_positive("refinement", refinement))
-    h0 = min(0.5, max(0.03, 0.5 * math.sqrt(max(gap, 0.0)))) / refinement
+    flat_refinement = (refinement if flat_refinement is None
+                       else float(check_positive("flat_refinement", flat_refinement)))
+    h0 = min(0.5, max(0.03, 0.5 * math.sqrt(max(gap, 0.0)))) / flat_refinement
     kappa = 0.5 / refinement
     lo, hi = flat
 

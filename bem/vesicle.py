@@ -328,12 +328,23 @@ class VesicleOperator(DropOperator):
 #: ends of the meshed tube (Poiseuille there), so the wall stays at 0.25
 WALL_REFINEMENT = 0.25
 
+#: axial extent [R] above which the wall panels beside the vesicle are lengthened by
+#: WALL_BODY_LENGTH/extent (:func:`bem.drop._wall_and_inlet`): the drop's rule ties them to the
+#: membrane's panel count, which for a long vesicle grows with its length, not with the
+#: resolution the wall needs. Measured at a fixed shape of (0.6, 0.98 lam_c), extent 10.8 R
+#: (outputs of V/U, Δp⁺, γ_max against the unscaled wall): 48 modes 4.5e-8, 88 modes 2e-9
+#: relative, wall shear at the tube ends unchanged, half the wall nodes and evaluation time;
+#: at 2.5 R the change is 9e-6 at 48 modes, so 5 R (= LONG_VESICLE) keeps a factor 2; the
+#: red blood cell (0.61, 1.39), extent 5.01 R, changes by 1.6e-9
+WALL_BODY_LENGTH = 5.0
+
 
 def vesicle_discretisation(n_modes: int, order: int = DEFAULT_ORDER,
                            n_panels: int | None = None) -> DropDiscretisation:
     """Resolution of a vesicle level with ``n_modes`` shape modes (panels as for the drop)."""
     return DropDiscretisation(n_modes=n_modes, n_panels=n_panels or _panels_for(n_modes),
-                              order=order, wall_refinement=WALL_REFINEMENT)
+                              order=order, wall_refinement=WALL_REFINEMENT,
+                              wall_body_length=WALL_BODY_LENGTH)
 
 
 # ---------------------------------------------------------------------------- initial shapes
@@ -575,6 +586,19 @@ NEAR_CRITICAL = 0.9
 #: 32-mode rungs (residual 1e-2 at each rung; at the target Δp⁺ 2818 at 40 modes, against
 #: 1778 mode-converged) and converges from its own lubrication shape
 RUNG_MAX_LENGTH = 9.0
+
+#: levels in a row whose density is re-built on the BEM shape of the level before, for a long
+#: vesicle near lam_c started from its own lubrication shape (ℓ > RUNG_MAX_LENGTH): the first
+#: re-built density comes from a level on the lubrication shape's density, which misses the
+#: BEM shape's rear film neck, and resolves it only in part. Measured at (0.6, 0.98 lam_c),
+#: Ca_B = 50 (consistent levels from 64 modes; V/U, γ_max, residual at 64 / 88 modes): one
+#: re-build 1.021926 / 1.020839, 930.6 / 1005.7, 3.1e-3 / 5.6e-4, contraction ~0.4 per +8
+#: modes, not converged at 88 modes (1602 BIE solves); two re-builds 1.021342 / 1.020790,
+#: 964.9 / 1009.8, 1.8e-3 / 2.1e-4, contraction 0.26-0.35, converged at 88 modes (1587 BIE
+#: solves; mode-converged 1.020781, 1011). Farther from lam_c one re-build is enough: at the red
+#: blood cell (0.61, 0.71 lam_c) a second one costs a level (682 BIE solves, 64 modes, against
+#: 454 and 56)
+NEAR_CRITICAL_REBUILDS = 2
 
 #: level (index in the ladder 16, 24, ...) on whose BEM shape the density is re-built for the
 #: rest of a short vesicle's automatic ladder (the seed's density family; "bend" for uniform)
@@ -874,9 +898,10 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     if density == "auto":
         density = "film" if ratio >= NEAR_CRITICAL and not long else "bend"
     # the ladder (module docstring): levels of ``sequence``; a seed that is not a BEM minimum
-    # has the density re-built once, on the BEM shape of level ``rebuild`` (an index), and
-    # every later level keeps it (a consistent ladder); a BEM seed (``initial`` a result, or
-    # the continuation rungs) already gives the density its shape
+    # has the density re-built on the BEM shape of level ``rebuild`` (an index; near lam_c
+    # again on the next level's, ``rebuilds``), and every later level keeps it (a consistent
+    # ladder); a BEM seed (``initial`` a result, or the continuation rungs) already gives the
+    # density its shape
     bem_seed = continuation or isinstance(initial, (VesicleResult, SpectralCurve))
     rebuilt = density if density in _DENSITIES else "bend"
     first = max(24, 8 * round(0.75 * ell) - 16) if long else 16
@@ -897,6 +922,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         rebuild = sequence.index(first)
     else:
         sequence, rebuild = list(range(16, max_modes + 1, 8)), REBUILD_LEVEL
+    # levels whose density is re-built on the shape of the level before (NEAR_CRITICAL_REBUILDS)
+    rebuilds = NEAR_CRITICAL_REBUILDS if valley and ratio > NEAR_CRITICAL else 1
     seed_source = "initial"
     rung_log = {}
 
@@ -980,7 +1007,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         # density fails (the "bend" density of the lubrication shape at (0.85, 0.2 lam_c): a
         # curve c_1 cannot close) starts on uniform arc length (None: made when needed)
         seeds = [prev, None] if not levels and np.size(prev.density) else [prev]
-        if rebuild is not None and i == rebuild + 1 and levels:
+        if rebuild is not None and rebuild < i <= rebuild + rebuilds and levels:
             # the density re-built on the BEM shape of the level before (it resolves what the
             # seed's density misses, e.g. a long vesicle's rear film neck)
             try:
