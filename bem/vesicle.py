@@ -71,6 +71,10 @@ Ladder and error estimate (automatic refinement, ``n_modes`` None):
   Jacobian each, which keep the cold start on the physical branch: started at 43–64 modes it
   drifts to a closing film). A density built on the lubrication shape misses the BEM shape's
   rear film neck (at (0.6, 1.94), 64 modes: γ_max 931 instead of the mode-converged 1011).
+  A level on that first re-built density still resolves the neck only in part, so a long
+  vesicle near lam_c re-builds it once more, on the next level's shape
+  (``NEAR_CRITICAL_REBUILDS``; at (0.6, 1.94) the consistent ladder then contracts by
+  0.26–0.35 per +8 modes instead of ~0.4 and converges at 88 modes).
 * the levels on that density, +8 modes each, form a consistent ladder: each starts from the
   previous minimum with its Jacobian prolonged (:func:`_prolonged_columns`), and their
   successive differences contract geometrically (spectral convergence; ratios 0.02–0.3 per 8
@@ -99,7 +103,15 @@ V/U 1.2591); they remain the last resort, and the residual test reports such a m
 Solver paths, before → after (each remaining one with its reason):
 
 * densities: uniform / film / bend chosen by regime, re-built on a BEM shape only for a long
-  vesicle's last level → film near lam_c, bend elsewhere, always built on a BEM shape (above).
+  vesicle's last level → film near lam_c, bend elsewhere, always built on a BEM shape (above);
+  re-built once → twice in a row for a long vesicle near lam_c started from its own
+  lubrication shape (measured at (0.6, 1.94): once, not converged at 88 modes, 1602 BIE
+  solves; twice, converged at 88 modes, 1587), once elsewhere (a second re-build costs the
+  red blood cell (0.61, 0.71 lam_c) a level: 682 BIE solves instead of 454).
+* wall mesh: the drop's rule, wall panels beside the body following the membrane's panel
+  count → the same, lengthened by ``WALL_BODY_LENGTH``/extent beside a vesicle longer than
+  5 R, whose panel count grows with its length (at (0.6, 1.94): outputs within 5e-8, half the
+  wall nodes and evaluation time, 2.8 s → 0.5 s per wall factorisation at 88 modes).
 * refinement: plain ladder to a pair (short), carriers + cross-density pair (long), pair
   (2n/3, n) (given ``n_modes``) → one consistent ladder with an extrapolated estimate; the
   carriers stay for a long vesicle's cold start, the pair for a given ``n_modes`` (its
@@ -121,9 +133,10 @@ Solver paths, before → after (each remaining one with its reason):
 Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
 
 * shape modes 8 <= n_modes, max_modes, rung_modes <= :data:`MAX_MODES` = 96 (the long
-  vesicle at (0.6, 0.98 λc) needs 64; a level of N modes has max(8, ceil(N/3)) panels and a
-  difference Jacobian costs N BEM evaluations, ~0.1–0.5 s each, so 96 modes is already
-  ~1 min per Jacobian); peak memory stays below 0.5 GB.
+  vesicle at (0.6, 0.98 λc) needs 88–96; a level of N modes has max(8, ceil(N/3)) panels
+  and a difference Jacobian costs N BEM evaluations, ~0.05–0.25 s each, so 96 modes is
+  already ~20 s per Jacobian); peak memory stays below 0.6 GB (measured 577 MB at
+  (0.6, 0.98 λc), 88 modes).
 * :data:`CA_B_MIN` = 0.01 <= Ca_B <= :data:`CA_B_MAX` = 1e5, the range of the lubrication
   solver that provides the initial shape (:mod:`lubrication.solve`; at 1e5 bending is within
   1e-6 of the high-Ca model). Ca_B = ηUR0²/κ is ~1–1000 for red blood cells (Chen et al.
@@ -333,10 +346,12 @@ WALL_REFINEMENT = 0.25
 #: membrane's panel count, which for a long vesicle grows with its length, not with the
 #: resolution the wall needs. Measured at a fixed shape of (0.6, 0.98 lam_c), extent 10.8 R
 #: (outputs of V/U, Δp⁺, γ_max against the unscaled wall): 48 modes 4.5e-8, 88 modes 2e-9
-#: relative, wall shear at the tube ends unchanged, half the wall nodes and evaluation time;
-#: at 2.5 R the change is 9e-6 at 48 modes, so 5 R (= LONG_VESICLE) keeps a factor 2; the
-#: red blood cell (0.61, 1.39), extent 5.01 R, changes by 1.6e-9
-WALL_BODY_LENGTH = 5.0
+#: relative with 5 R, wall shear at the tube ends unchanged, half the wall nodes and
+#: evaluation time; with 2.5 R the change is 9e-6 at 48 modes. 6 R keeps a factor 2.4 from
+#: that and leaves the wall of the red blood cell (0.61, 1.39) as it was (extent 5.0 R, its
+#: lubrication seed 5.2 R): with 5 R its outputs moved by 1.6e-9 but its carrier levels took
+#: another path, 566 BIE solves instead of 454
+WALL_BODY_LENGTH = 6.0
 
 
 def vesicle_discretisation(n_modes: int, order: int = DEFAULT_ORDER,
@@ -811,7 +826,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         (γ_max) and the residual is below ``residual_tol``. Default ``max_modes``: 80, or for
         a long vesicle 40 more than the level whose shape re-builds the density (about 6
         modes per tube radius of its estimated length ℓ ≈ ℓc λ/λc, Chen et al. 2020 eq. sL,
-        minus 16; 88 at (0.6, 0.98 λc)).
+        minus 16), 48 more near lam_c where the density is re-built twice (96 at
+        (0.6, 0.98 λc)); at most MAX_MODES.
     tol, tension_tol : float
         Relative tolerances of the estimated discretisation error of V/U and Δp⁺, and of
         γ_max (a peak value of the tension, which converges more slowly: at (0.6, 1.94) its
@@ -905,8 +921,11 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     bem_seed = continuation or isinstance(initial, (VesicleResult, SpectralCurve))
     rebuilt = density if density in _DENSITIES else "bend"
     first = max(24, 8 * round(0.75 * ell) - 16) if long else 16
-    if max_modes is None:
-        max_modes = min(MAX_MODES, first + 40 if long else 80)
+    # levels whose density is re-built on the shape of the level before (NEAR_CRITICAL_REBUILDS)
+    rebuilds = (NEAR_CRITICAL_REBUILDS if valley and ratio > NEAR_CRITICAL and not bem_seed
+                and n_modes is None else 1)
+    if max_modes is None:      # a second re-build takes a level: the consistent ladder keeps 5
+        max_modes = min(MAX_MODES, first + 32 + 8 * rebuilds if long else 80)
     if n_modes is not None:
         sequence, rebuild = [max(6, round(2 * n_modes / 3)), n_modes], None
     elif bem_seed:       # from the seed's mode count near lam_c (a refit to fewer modes
@@ -922,8 +941,6 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         rebuild = sequence.index(first)
     else:
         sequence, rebuild = list(range(16, max_modes + 1, 8)), REBUILD_LEVEL
-    # levels whose density is re-built on the shape of the level before (NEAR_CRITICAL_REBUILDS)
-    rebuilds = NEAR_CRITICAL_REBUILDS if valley and ratio > NEAR_CRITICAL else 1
     seed_source = "initial"
     rung_log = {}
 
