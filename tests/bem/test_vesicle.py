@@ -156,20 +156,20 @@ def _stored_long_shape() -> VesicleResult:
 def test_long_vesicle_wall_beside_the_body_is_converged(report):
     """A long vesicle's wall panels beside the body are lengthened by WALL_BODY_LENGTH/extent
     (the drop's rule follows the membrane's panel count, which grows with the vesicle's
-    length). At the stored 64-mode shape of (0.6, 1.94), against the unscaled wall (about
-    twice the wall nodes): V/U and dp+ agree to 1e-7 relative (measured 2e-9 at 88 modes,
-    4.5e-8 at 48), the tension maximum to 1e-6 and the residual (a maximum over the nodes) to
-    1e-5 (measured 1.7e-6), and the wall shear at the
-    ends of the meshed tube is unchanged (Poiseuille, 4, there)."""
+    length). At the stored 64-mode shape of (0.6, 1.94), extent 10.8 R, against the unscaled
+    wall (1.7 times the wall nodes): V/U and dp+ agree to 1e-7 relative (measured 3.7e-9;
+    with WALL_BODY_LENGTH 5 R, 2e-9 at 88 modes and 4.5e-8 at 48), the tension maximum to 1e-6
+    and the residual (a maximum over the nodes) to 1e-5, and the wall shear at the ends of
+    the meshed tube to 1e-6 (measured 1.1e-7; both within 1e-4 of Poiseuille, 4)."""
     from bem.vesicle import WALL_BODY_LENGTH, VesicleOperator, vesicle_discretisation
     seed = _stored_long_shape()
     curve = seed.curve()
     xr, xf = curve.extent()
-    assert xf - xr > 2 * WALL_BODY_LENGTH
+    assert xf - xr > 1.5 * WALL_BODY_LENGTH
     disc = vesicle_discretisation(curve.n_modes)
     ops = [VesicleOperator(seed.nu, seed.lam, seed.ca_b, d, curve, curve.n_modes)
            for d in (disc, replace(disc, wall_body_length=None))]
-    assert ops[0].wall.x.size < 0.6 * ops[1].wall.x.size
+    assert ops[0].wall.x.size < 0.7 * ops[1].wall.x.size
     states = [o.evaluate(curve) for o in ops]
     a, b = states
     rel = max(abs(b["V"] / a["V"] - 1), abs(b["dp"] / a["dp"] - 1))
@@ -180,7 +180,7 @@ def test_long_vesicle_wall_beside_the_body_is_converged(report):
     tmax = [_tension_max(curve, st["g"]) for st in states]
     assert tmax[0] == pytest.approx(tmax[1], rel=1e-6)
     ends = [o.wall_shear(curve, st["g"])[1][[0, -1]] for o, st in zip(ops, states)]
-    assert np.allclose(ends[0], ends[1], rtol=0.0, atol=1e-7), ends
+    assert np.allclose(ends[0], ends[1], rtol=0.0, atol=1e-6), ends
     assert np.all(np.abs(ends[0] - 4.0) < 1e-4), ends
 
 
