@@ -105,13 +105,22 @@ Solver paths, before → after (each remaining one with its reason):
 * densities: uniform / film / bend chosen by regime, re-built on a BEM shape only for a long
   vesicle's last level → film near lam_c, bend elsewhere, always built on a BEM shape (above);
   re-built once → twice in a row for a long vesicle near lam_c started from its own
-  lubrication shape (measured at (0.6, 1.94): once, not converged at 88 modes, 1602 BIE
-  solves; twice, converged at 88 modes, 1587), once elsewhere (a second re-build costs the
-  red blood cell (0.61, 0.71 lam_c) a level: 682 BIE solves instead of 454).
+  lubrication shape, with five consistent levels up to 48 modes above the first (measured at
+  (0.6, 1.94): once, not converged at 88 modes, 1602 BIE solves; twice, converged at 88 or 96
+  modes depending on the carriers' path, 1587 or 1745), once elsewhere (a second re-build
+  costs the red blood cell (0.61, 0.71 lam_c) a level: 682 BIE solves instead of 454).
+* not adopted (measured at (0.6, 1.94)): a Jacobian carried across a re-built density by
+  the chain rule (mode map by curve fits) is accurate for the lower half of the modes only
+  (column errors 0.3–6 %, above it 12–56 %; test case (0.9, 1.0), 16 → 24 modes), saving at
+  most ~3 % of the BIE solves; ending a valley level once a fresh Jacobian's step achieves
+  90 % of its promised decrease (1358 BIE solves instead of 1745) leaves the 72- and 80-mode
+  levels 2e-5 (V/U) and 0.1 (Δp⁺) from their certified minima, noise of the size of the
+  differences the error estimate extrapolates.
 * wall mesh: the drop's rule, wall panels beside the body following the membrane's panel
   count → the same, lengthened by ``WALL_BODY_LENGTH``/extent beside a vesicle longer than
-  5 R, whose panel count grows with its length (at (0.6, 1.94): outputs within 5e-8, half the
-  wall nodes and evaluation time, 2.8 s → 0.5 s per wall factorisation at 88 modes).
+  6 R, whose panel count grows with its length (at a fixed 64-mode shape of (0.6, 1.94):
+  outputs within 4e-9, 1.7 times fewer wall nodes; with 5 R, 0.37 s → 0.20 s per evaluation
+  at 88 modes).
 * refinement: plain ladder to a pair (short), carriers + cross-density pair (long), pair
   (2n/3, n) (given ``n_modes``) → one consistent ladder with an extrapolated estimate; the
   carriers stay for a long vesicle's cold start, the pair for a given ``n_modes`` (its
@@ -606,13 +615,16 @@ RUNG_MAX_LENGTH = 9.0
 #: vesicle near lam_c started from its own lubrication shape (ℓ > RUNG_MAX_LENGTH): the first
 #: re-built density comes from a level on the lubrication shape's density, which misses the
 #: BEM shape's rear film neck, and resolves it only in part. Measured at (0.6, 0.98 lam_c),
-#: Ca_B = 50 (consistent levels from 64 modes; V/U, γ_max, residual at 64 / 88 modes): one
-#: re-build 1.021926 / 1.020839, 930.6 / 1005.7, 3.1e-3 / 5.6e-4, contraction ~0.4 per +8
+#: Ca_B = 50 (consistent levels from 56 / 64 modes; V/U, γ_max, residual at 64 / 88 modes):
+#: one re-build 1.021926 / 1.020839, 930.6 / 1005.7, 3.1e-3 / 5.6e-4, contraction ~0.4 per +8
 #: modes, not converged at 88 modes (1602 BIE solves); two re-builds 1.021342 / 1.020790,
 #: 964.9 / 1009.8, 1.8e-3 / 2.1e-4, contraction 0.26-0.35, converged at 88 modes (1587 BIE
-#: solves; mode-converged 1.020781, 1011). Farther from lam_c one re-build is enough: at the red
-#: blood cell (0.61, 0.71 lam_c) a second one costs a level (682 BIE solves, 64 modes, against
-#: 454 and 56)
+#: solves; mode-converged 1.020781, 1011). The unconverged carrier levels make the shape the
+#: density is built on depend on details such as the wall mesh: with WALL_BODY_LENGTH 6 R
+#: instead of 5 R the same ladder contracts by ~0.38 and converges at 96 modes (1745 BIE
+#: solves), which is why this regime keeps five consistent levels (``max_modes``). Farther from
+#: lam_c one re-build is enough: at the red blood cell (0.61, 0.71 lam_c) a second one costs a
+#: level (682 BIE solves, 64 modes, against 454 and 56)
 NEAR_CRITICAL_REBUILDS = 2
 
 #: level (index in the ladder 16, 24, ...) on whose BEM shape the density is re-built for the
