@@ -74,7 +74,7 @@ Ladder and error estimate (automatic refinement, ``n_modes`` None):
   A level on that first re-built density still resolves the neck only in part, so a long
   vesicle near lam_c re-builds it once more, on the next level's shape
   (``NEAR_CRITICAL_REBUILDS``; at (0.6, 1.94) the consistent ladder then contracts by
-  0.26–0.35 per +8 modes instead of ~0.4 and converges at 88 modes).
+  0.26–0.38 per +8 modes instead of ~0.4 and converges at 88 or 96 modes).
 * the levels on that density, +8 modes each, form a consistent ladder: each starts from the
   previous minimum with its Jacobian prolonged (:func:`_prolonged_columns`), and their
   successive differences contract geometrically (spectral convergence; ratios 0.02–0.3 per 8
@@ -109,13 +109,13 @@ Solver paths, before → after (each remaining one with its reason):
   (0.6, 1.94): once, not converged at 88 modes, 1602 BIE solves; twice, converged at 88 or 96
   modes depending on the carriers' path, 1587 or 1745), once elsewhere (a second re-build
   costs the red blood cell (0.61, 0.71 lam_c) a level: 682 BIE solves instead of 454).
-* not adopted (measured at (0.6, 1.94)): a Jacobian carried across a re-built density by
-  the chain rule (mode map by curve fits) is accurate for the lower half of the modes only
-  (column errors 0.3–6 %, above it 12–56 %; test case (0.9, 1.0), 16 → 24 modes), saving at
-  most ~3 % of the BIE solves; ending a valley level once a fresh Jacobian's step achieves
-  90 % of its promised decrease (1358 BIE solves instead of 1745) leaves the 72- and 80-mode
-  levels 2e-5 (V/U) and 0.1 (Δp⁺) from their certified minima, noise of the size of the
-  differences the error estimate extrapolates.
+* not adopted: a Jacobian carried across a re-built density by the chain rule (mode map by
+  curve fits, rows by arc-length fraction) is accurate for the lower half of the modes only
+  (at (0.9, 1.0), 16 → 24 modes: column errors 0.3–6 %, above it 12–56 %), which would save
+  ~3 % of the BIE solves at (0.6, 1.94); ending a valley level once a fresh Jacobian's step
+  achieves 90 % of its promised decrease of |F|² (at (0.6, 1.94): 1358 BIE solves instead of
+  1745) leaves the 72- and 80-mode levels 2e-5 (V/U) and 0.1 (Δp⁺) from their certified
+  minima, noise of the size of the differences the error estimate extrapolates.
 * wall mesh: the drop's rule, wall panels beside the body following the membrane's panel
   count → the same, lengthened by ``WALL_BODY_LENGTH``/extent beside a vesicle longer than
   6 R, whose panel count grows with its length (at a fixed 64-mode shape of (0.6, 1.94):
@@ -144,8 +144,8 @@ Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
 * shape modes 8 <= n_modes, max_modes, rung_modes <= :data:`MAX_MODES` = 96 (the long
   vesicle at (0.6, 0.98 λc) needs 88–96; a level of N modes has max(8, ceil(N/3)) panels
   and a difference Jacobian costs N BEM evaluations, ~0.05–0.25 s each, so 96 modes is
-  already ~20 s per Jacobian); peak memory stays below 0.6 GB (measured 577 MB at
-  (0.6, 0.98 λc), 88 modes).
+  already ~20 s per Jacobian); peak memory stays below 1 GB (measured 839 MB at
+  (0.6, 0.98 λc), 96 modes; 1.5 GB before the wall beside long vesicles was coarsened).
 * :data:`CA_B_MIN` = 0.01 <= Ca_B <= :data:`CA_B_MAX` = 1e5, the range of the lubrication
   solver that provides the initial shape (:mod:`lubrication.solve`; at 1e5 bending is within
   1e-6 of the high-Ca model). Ca_B = ηUR0²/κ is ~1–1000 for red blood cells (Chen et al.
