@@ -112,11 +112,16 @@ def test_a_sample_of_the_shipped_map_passes_without_false_alarms(shipped):
 
 @pytest.mark.slow
 def test_every_converged_map_point_passes_without_false_alarms(build_map, shipped):
-    """False-alarm rate on all converged map points: 0 of 431 build points (their own map) and
-    0 of the shipped map's node points, neither failures nor warnings."""
+    """False-alarm rate on all converged map points (the build points against their own map,
+    the shipped map's node points): no failure, and no warning but the shape class of a point
+    on the elongated branch in a cell where the map's classes differ (Chen's line, which does
+    not know that branch, decides there)."""
     for rows, m in ((build_rows(build_map), build_map), (node_rows(shipped), shipped)):
         report = check_results(rows, solution_map=m, bem=False)
-        assert report.counts["pass"] == len(rows), _bad(report)
+        assert not _bad(report, include_warnings=False), _bad(report, include_warnings=False)
+        warned = [c for _, c in report.failures(include_warnings=True)]
+        assert all(c.name == "shape class" and "elongated" in c.why for c in warned), _bad(report)
+        assert len(warned) <= 2, _bad(report)
 
 
 @pytest.mark.slow
