@@ -172,6 +172,12 @@ SHAPE_AREA_BAND = (0.21, 0.15)
 #: parachute-bullet brackets of our map (BEM lines at Ca_B = 15 and 50): the tolerance of a
 #: class disagreeing with the line, in ν − ν_T.
 TRANSITION_BAND_NU = 0.05
+#: Below this λ/λc a second steady branch, the elongated bullet, coexists with the parachute
+#: (tests/benchmarks/map_bistability.py at ν = 0.8, λ/λc 0.2–0.3; the map build's elongated
+#: point (0.65, 0.35 λc, Ca_B 15), ℓ 3.51 between parachutes of ℓ 2.64 and 2.15, 0.29 below the
+#: line): a bullet there far below the line is a warning (which branch a time-dependent run
+#: reaches depends on its start), not a failure. Chen et al. found parachutes there.
+ELONGATED_BRANCH_LAM_RATIO = 0.5
 #: Small rigid sphere: V/U = 2 − (4/3)λ² + c_V λ⁵, Δp⁺a/(ηU) = 16λ⁶(1 + c_P λ⁵); our BEM sphere
 #: (tol 1e-10) gives c_V = 0.32-0.42 and c_P = 1.40-1.82 for λ = 0.05-0.5: the next terms
 #: are taken as K λ⁵ with K = 1 and 2.
@@ -1039,11 +1045,15 @@ def shape_class_check(row: Row, solution_map=None) -> CheckResult | str:
         expected = str(shape_class_chen2020(nu, lam))
     distance = nu - (1.126 - 0.29 * lam)
     verdict = (Verdict.PASS if given == expected else _verdict(distance, TRANSITION_BAND_NU))
+    why = (f"inside its range; a disagreement is judged by the distance nu - nu_T to the line, "
+           f"tolerance {TRANSITION_BAND_NU:g} (where our map's transitions lie)")
+    if (verdict is Verdict.FAIL and given == "bullet"
+            and lam < ELONGATED_BRANCH_LAM_RATIO * float(critical_confinement(nu))):
+        verdict = Verdict.WARN
+        why += (f"; below lam/lam_c = {ELONGATED_BRANCH_LAM_RATIO:g} an elongated bullet branch "
+                "is also steady (our map build), Chen et al. found parachutes")
     return CheckResult("shape class", "shape_class", verdict, given, expected, distance,
-                       TRANSITION_BAND_NU, "Chen et al. 2020 eq. transition",
-                       f"inside its range; a disagreement is judged by the distance nu - nu_T "
-                       f"to the line, tolerance {TRANSITION_BAND_NU:g} (where our map's "
-                       "transitions lie)", ref)
+                       TRANSITION_BAND_NU, "Chen et al. 2020 eq. transition", why, ref)
 
 
 #: Monotone trends along a series at fixed nu and Ca_B: (quantity, +1 increasing / −1

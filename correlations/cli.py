@@ -363,7 +363,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--solver", action="append", default=[], choices=SOLVERS,
                    help="let the method table use this numerical solver where it is valid, "
                         "ahead of the closed forms (repeatable; lubrication: seconds, bem: the "
-                        "BEM vesicle, most accurate, minutes per case)")
+                        "BEM vesicle, most accurate, seconds to minutes per case)")
     e.add_argument("--no-map", action="store_true",
                    help="do not use the shipped solution map (stored BEM and lubrication "
                         "solutions, used by default inside its range, after enabled solvers): "

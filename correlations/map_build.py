@@ -35,8 +35,8 @@ point a finished line returns that is not yet on disk.
 
 Resource envelope: a point takes 0.1–3 s (lubrication) to minutes (BEM near λc); ``max_time``
 bounds each point (an expired point is stored as failed with the reason). The default grid has
-9 ν × (10 BEM + 11 lubrication λ/λc) × 4 Ca_B = 756 points in 76 lines (36 lubrication, 40
-BEM).
+9 ν × (13 BEM + 11 lubrication λ/λc) × 7 Ca_B = 1512 points in 154 lines (63 lubrication, 91
+BEM); the stored per-point times of the shipped build add up to about 5 h on one core.
 """
 
 from __future__ import annotations
@@ -66,13 +66,15 @@ METHODS = ("bem", "lubrication")
 #: seconds to wait for a Dask scheduler before --scheduler is reported unreachable
 SCHEDULER_TIMEOUT_S = 5
 
-#: The minimum grid the product needs. The BEM and lubrication λ/λc lists overlap at 0.9–0.98
-#: on purpose: the overlap measures where lubrication becomes accurate (the model error of the
-#: map's lubrication values, :mod:`correlations.solution_map`).
+#: The shipped map's grid. The BEM and lubrication λ/λc lists overlap at 0.9–0.98 on purpose:
+#: the overlap measures where lubrication becomes accurate (the model error of the map's
+#: lubrication values, :mod:`correlations.solution_map`). λ/λc = 0.35, 0.45 and Ca_B = 9, 25,
+#: 150 refine the minimum grid where the bullet–parachute change makes Δp⁺ and ℓ vary fastest
+#: (off-grid errors of tests/benchmarks/map_offgrid.py), λ/λc = 0.85 before the film forms.
 DEFAULT_GRID = {
     "methods": list(METHODS),
     "nu": [0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95, 0.98],
-    "lam_ratio": {"bem": [0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 0.98],
+    "lam_ratio": {"bem": [0.2, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 0.98],
                   "lubrication": [0.9, 0.92, 0.94, 0.95, 0.96, 0.97, 0.98, 0.99, 0.995, 0.999,
                                   0.9999]},
     "ca_b": [5.0, 9.0, 15.0, 25.0, 50.0, 150.0, 500.0],
@@ -115,6 +117,15 @@ def make_grid(nu=None, lam_ratio=None, ca_b=None, methods=None) -> dict:
             "nu": values("nu", nu, DEFAULT_GRID["nu"], 0.0, 1.0),
             "lam_ratio": ratios,
             "ca_b": values("ca_b", ca_b, DEFAULT_GRID["ca_b"], 0.0, math.inf)}
+
+
+def _contains(grid: dict, other: dict) -> bool:
+    """True if every list of ``grid`` (methods, ν, λ/λc per method, Ca_B) contains ``other``'s:
+    a build of ``other`` extended to ``grid`` keeps all its points."""
+    return (set(other["methods"]) <= set(grid["methods"])
+            and set(other["nu"]) <= set(grid["nu"]) and set(other["ca_b"]) <= set(grid["ca_b"])
+            and all(set(other["lam_ratio"][m]) <= set(grid["lam_ratio"][m])
+                    for m in other["methods"]))
 
 
 def line_tasks(grid: dict) -> list[tuple[str, float, list[tuple[float, float]]]]:
@@ -338,8 +349,9 @@ def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
         Build folder: ``build.json`` and one JSON file per finished point.
     grid : dict, optional
         From :func:`make_grid`. Default: the grid of an existing ``build.json`` (resume), else
-        :data:`DEFAULT_GRID`. A grid or options different from those of an existing
-        ``build.json`` are refused (start a new folder).
+        :data:`DEFAULT_GRID`. A grid that contains the stored one extends the build (its
+        points are kept, ``build.json`` records the new grid and the date); another grid, or
+        options different from the stored ones, are refused (start a new folder).
     options : dict, optional
         Solver options per method, merged over :data:`DEFAULT_OPTIONS`.
     workers : int, optional
@@ -376,14 +388,20 @@ def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
             raise InvalidParameterError("out", str(folder), "a new folder or a build folder of "
                                         "'vesicle-tube map build'",
                                         f"unreadable build.json ({exc})") from None
-        if grid is not None and grid != old_grid:
-            raise InvalidParameterError("out", str(folder), "a new folder, or the grid it was "
-                                        "built with", "it holds a build of another grid")
+        extended = grid is not None and grid != old_grid
+        if extended and not _contains(grid, old_grid):
+            raise InvalidParameterError("out", str(folder), "a new folder, the grid it was "
+                                        "built with, or a grid that contains it (an extension)",
+                                        "it holds a build of another grid")
         if old.get("parameters", {}).get("options") != json.loads(json.dumps(options)):
             raise InvalidParameterError("out", str(folder), "a new folder, or the solver "
                                         "options it was built with", "it holds a build with "
                                         f"options {old['parameters'].get('options')}")
-        grid = old_grid
+        if extended:                     # the stored points stay; only the new ones are solved
+            old["grid"] = grid
+            old.setdefault("extended", []).append(_now())
+            write_json(folder / "build.json", old, indent=1, sort_keys=False)
+        grid = grid if extended else old_grid
     grid = grid or make_grid()
     client = _connect(scheduler) if scheduler else None
     try:

@@ -141,3 +141,14 @@ def test_a_benchmark_not_measured_renders_its_fallback_text(data_dir):
 def test_a_fallback_text_is_refused_outside_the_benchmark_files(data_dir):
     with pytest.raises(ValueError, match="only for the benchmark files"):
         vr.render("{{json:cases.json#cases/7/V:.3f|not measured}}", {}, data_dir)
+
+
+def test_join_lists_numbers_and_fields_of_a_stored_list(data_dir):
+    (data_dir / "grid.json").write_text(json.dumps({"ca": [5.0, 9.0, 150.0], "none": [],
+                                                    "holes": [{"nu": 0.6, "r": 0.85},
+                                                              {"nu": 0.65, "r": 0.5}]}))
+    text = vr.render("{{json:grid.json#ca/join()}}; {{json:grid.json#holes/join(nu,r)}}; "
+                     "{{json:grid.json#none/join()}}", {}, data_dir)[0]
+    assert text == "5, 9, 150; (0.6, 0.85), (0.65, 0.5); none"
+    with pytest.raises(vr.MissingRecord, match=r"without the numbers \['ca_b'\]"):
+        vr.render("{{json:grid.json#holes/join(ca_b)}}", {}, data_dir)

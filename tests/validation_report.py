@@ -29,7 +29,8 @@ Placeholders
     records whose keys match the glob (e.g. the instances of a parametrized test), with the
     fields ``@test``, ``@tol``, ``@kind`` where the matched records agree;
     ``{{json:<file in docs/data>#a/b/0/c:spec}}``: a value a committed script stored
-    (a last part ``len()`` gives the length of a stored list);
+    (a last part ``len()`` gives the length of a stored list, ``join()`` its numbers as
+    ``5, 9, 15``, ``join(a,b)`` its items' fields as ``(1, 2), (3, 4)``, ``none`` if empty);
     ``{{json:bench_<name>.json#a/b:spec|not measured}}``: the same with a fallback text, for the
     benchmark files only (``docs/data/bench_*.json``, written by ``tests/benchmarks/``): timings
     are not reproducible by the tests, and a benchmark not run on this checkout (no file, or no
@@ -167,6 +168,16 @@ def _json_value(ref: str, data_dir: Path, cache: dict):
     for part in filter(None, path.split("/")):
         if part == "len()":                      # the number of items of a stored list
             node = len(node)
+            continue
+        if part.startswith("join(") and part.endswith(")") and isinstance(node, list):
+            fields = [f.strip() for f in part[5:-1].split(",") if f.strip()]
+            try:
+                items = [format(v, "g") if not fields else
+                         "(" + ", ".join(format(v[f], "g") for f in fields) + ")" for v in node]
+            except (KeyError, TypeError, ValueError):
+                raise MissingRecord(f"placeholder {{{{json:{ref}}}}}: {file} has items "
+                                    f"without the numbers {fields}") from None
+            node = ", ".join(items) if items else "none"
             continue
         try:
             node = node[int(part)] if isinstance(node, list) else node[part]

@@ -4,8 +4,9 @@ coverage.
 Run with ``python tests/benchmarks/map_offgrid.py [--map FILE] [--json FILE] [--points N]``.
 The points are a fixed pseudo-random sample (seed 2026) of (ν, λ/λc, Ca_B) inside the map's
 box, ν in [0.6, 0.98], λ/λc in [0.2, 0.95], log-uniform Ca_B in [5, 500] (or the Ca_B values
-given with ``--ca-b``), none on a grid node (each coordinate at least 0.2 of a grid step from
-the nearest node). Each is solved directly by the BEM at its default options (Ca_B given); where
+given with ``--ca-b``), none on a node of the map's grid (each coordinate at least 0.2 of a
+grid step from the nearest node; a finer grid thus draws new points where old ones now lie
+near a node). Each is solved directly by the BEM at its default options (Ca_B given); where
 that does not converge (cold seeds can end in non-steady minima at low ν), a second solve starts
 from the nearest stored shape of the map's build folder, as the map's own points were started
 from their neighbours. It is compared with :func:`query_map` at the same point.
@@ -36,7 +37,6 @@ import time
 from pathlib import Path
 
 from bem.vesicle import solve_vesicle
-from correlations.map_build import DEFAULT_GRID
 from correlations.solution_map import load_map, query_map, read_points
 from lubrication.io import write_json
 
@@ -55,17 +55,17 @@ def _off(value: float, nodes: list[float], log: bool = False) -> bool:
     return abs(x - xs[i]) >= 0.2 * step
 
 
-def sample(n: int, ca_b: list[float] | None = None, seed: int = 2026) -> list[tuple]:
-    """``n`` off-grid points (ν, λ/λc, Ca_B) of the default grid's BEM box."""
+def sample(n: int, grid: dict, ca_b: list[float] | None = None, seed: int = 2026) -> list[tuple]:
+    """``n`` points (ν, λ/λc, Ca_B) of the BEM box, each off the nodes of ``grid`` (the map's
+    grid: its ν, its BEM λ/λc, its Ca_B)."""
     rng, out = random.Random(seed), []
-    grid_r = DEFAULT_GRID["lam_ratio"]["bem"]
     while len(out) < n:
         nu = round(rng.uniform(0.6, 0.98), 4)
         r = round(rng.uniform(0.2, 0.95), 4)
         ca = (rng.choice(ca_b) if ca_b else
               round(math.exp(rng.uniform(math.log(5.0), math.log(500.0))), 2))
-        if (_off(nu, DEFAULT_GRID["nu"]) and _off(r, grid_r)
-                and (ca_b or _off(ca, DEFAULT_GRID["ca_b"], log=True))):
+        if (_off(nu, grid["nu"]) and _off(r, grid["lam_ratio"]["bem"])
+                and (ca_b or _off(ca, grid["ca_b"], log=True))):
             out.append((nu, r, ca))
     return out
 
@@ -154,7 +154,7 @@ def main(argv=None) -> int:
     rows = []
     print(f"{'nu':>6} {'r':>6} {'Ca_B':>7} {'s':>5}  " + "  ".join(
         f"{q:>10} {'rel err':>8} {'bar':>8}" for q in TARGETS), flush=True)
-    for point in sample(args.points, args.ca_b):
+    for point in sample(args.points, m.grid, args.ca_b):
         row = done.get(point)
         if row is None or (not row["direct"]["success"] and "seed" not in row["direct"]):
             row = {"point": list(point), "direct": _direct(*point, stored)}

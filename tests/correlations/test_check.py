@@ -112,11 +112,16 @@ def test_a_sample_of_the_shipped_map_passes_without_false_alarms(shipped):
 
 @pytest.mark.slow
 def test_every_converged_map_point_passes_without_false_alarms(build_map, shipped):
-    """False-alarm rate on all converged map points: 0 of 431 build points (their own map) and
-    0 of the shipped map's node points, neither failures nor warnings."""
+    """False-alarm rate on all converged map points (the build points against their own map,
+    the shipped map's node points): no failure, and no warning but the shape class of a point
+    on the elongated branch in a cell where the map's classes differ (Chen's line, which does
+    not know that branch, decides there)."""
     for rows, m in ((build_rows(build_map), build_map), (node_rows(shipped), shipped)):
         report = check_results(rows, solution_map=m, bem=False)
-        assert report.counts["pass"] == len(rows), _bad(report)
+        assert not _bad(report, include_warnings=False), _bad(report, include_warnings=False)
+        warned = [c for _, c in report.failures(include_warnings=True)]
+        assert all(c.name == "shape class" and "elongated" in c.why for c in warned), _bad(report)
+        assert len(warned) <= 2, _bad(report)
 
 
 @pytest.mark.slow
@@ -152,12 +157,15 @@ def test_off_grid_lubrication_solutions_pass_against_the_interpolated_map(shippe
 def test_the_asymptotic_references_pass_our_bem_and_lubrication_points(build_map):
     """With the map switched off, the near-critical (delta <= 0.1) and small-sphere (lam <= 0.5,
     nu >= 0.9) references with their error models pass every converged build point they apply
-    to (the error models were measured on these points: this is their regression test)."""
+    to (the error models were measured on these points: this is their regression test). The
+    only warnings are shape classes on the elongated branch, which Chen's line does not know."""
     rows = build_rows(build_map)
     report = check_results(rows, solution_map=False, bem=False)
     used = [c.source for r in report.rows for c in r.checks if c.name.endswith("reference")]
     assert sum("asmyp" in s for s in used) > 300 and sum("small rigid" in s for s in used) >= 10
-    assert not _bad(report), _bad(report)
+    assert not _bad(report, include_warnings=False), _bad(report, include_warnings=False)
+    warned = [c for r, c in report.failures(include_warnings=True)]
+    assert all(c.name == "shape class" and "elongated" in c.why for c in warned), _bad(report)
 
 
 def test_bem_spheres_pass_the_small_sphere_law_and_the_bem_reference():
@@ -404,7 +412,8 @@ def test_a_series_against_the_trend_is_flagged(good, build_map):
 
 def test_shape_class_against_the_map_and_chen_line(build_map):
     """A bullet (nu = 0.9, lam/lam_c = 0.8 in the map) called a parachute fails; without the
-    map, Chen's line (nu_T = 1.126 - 0.29 lam) decides with tolerance 0.05 in nu - nu_T."""
+    map, Chen's line (nu_T = 1.126 - 0.29 lam) decides with tolerance 0.05 in nu - nu_T; a
+    bullet far below it at lam/lam_c < 0.5, where the elongated branch is also steady, warns."""
     row = {"nu": 0.9, "lam": 0.8 * critical_confinement(0.9), "V_over_U": 1.2062,
            "dp_plus_R0": 21.19, "shape_class": "parachute"}
     shape = lambda r, m: next(c for c in check_results([r], solution_map=m).rows[0].checks
@@ -414,8 +423,10 @@ def test_shape_class_against_the_map_and_chen_line(build_map):
     near = dict(row, nu=0.8, lam=(1.126 - 0.8) / 0.29 + 0.05, shape_class="parachute")
     assert shape(near, False).verdict is Verdict.PASS                   # 0.0145 above the line
     assert shape(dict(near, lam=1.5), False).verdict is Verdict.WARN    # 0.109 above
-    far = dict(near, nu=0.6, lam=0.6, shape_class="bullet")
-    assert shape(far, False).verdict is Verdict.FAIL                    # 0.352 below
+    far = dict(near, nu=0.6, lam=1.2, shape_class="bullet")
+    assert shape(far, False).verdict is Verdict.FAIL                    # 0.178 below
+    small = shape(dict(far, lam=0.6), False)     # 0.352 below, lam/lam_c 0.30: elongated branch
+    assert small.verdict is Verdict.WARN and "elongated" in small.why
 
 
 def test_unknown_map_solver_error_gets_the_bem_tolerance_as_stand_in():

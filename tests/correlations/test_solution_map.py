@@ -256,6 +256,21 @@ def test_a_folder_of_another_grid_is_refused(tmp_path, monkeypatch):
         build_map(tmp_path, make_grid([0.8], [0.3], [50.0], ["bem"]), workers=1)
 
 
+def test_a_grid_containing_the_stored_one_extends_the_build(tmp_path, monkeypatch):
+    """Extension: the stored points are kept and not recomputed, only the new nodes are solved,
+    and build.json records the new grid (a later resume without a grid uses it)."""
+    monkeypatch.setitem(map_build.SOLVERS, "bem", _fake_solver)
+    build_map(tmp_path, make_grid([0.9], [0.3], [50.0], ["bem"]), workers=1)
+    CALLS.clear()
+    wider = make_grid([0.9], [0.3, 0.35], [50.0], ["bem"])
+    out = build_map(tmp_path, wider, workers=1)
+    assert [c[:2] for c in CALLS] == [(0.9, 0.35)] and out["done"] == 2 and out["new"] == 1
+    info = json.loads((tmp_path / "build.json").read_text())
+    assert info["grid"]["lam_ratio"]["bem"] == [0.3, 0.35] and len(info["extended"]) == 1
+    CALLS.clear()
+    assert build_map(tmp_path, None, workers=1)["total"] == 2 and CALLS == []
+
+
 @pytest.mark.slow
 def test_a_cheap_bem_line_stores_shapes_and_resumes_from_them(tmp_path):
     """One real BEM line, lam/lam_c = 0.3, nu = 0.98 then 0.95, 8 modes, loose tolerances
