@@ -36,7 +36,7 @@ point a finished line returns that is not yet on disk.
 Resource envelope: a point takes 0.1–3 s (lubrication) to minutes (BEM near λc); ``max_time``
 bounds each point (an expired point is stored as failed with the reason). The default grid has
 9 ν × (13 BEM + 11 lubrication λ/λc) × 7 Ca_B = 1512 points in 154 lines (63 lubrication, 91
-BEM); the stored per-point times of the shipped build add up to about 5 h on one core.
+BEM); each point file stores its solve time (``seconds``), so a build's cost is their sum.
 """
 
 from __future__ import annotations
@@ -401,7 +401,7 @@ def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
             old["grid"] = grid
             old.setdefault("extended", []).append(_now())
             write_json(folder / "build.json", old, indent=1, sort_keys=False)
-        grid = grid if extended else old_grid
+        grid = grid or old_grid
     grid = grid or make_grid()
     client = _connect(scheduler) if scheduler else None
     try:
