@@ -122,8 +122,9 @@ class DropDiscretisation:
     (``wall_refinement`` scales it); ``quad_tol`` is the accuracy of the singular and
     near-singular panel integrals; ``tube_tol`` sets the meshed wall length from the
     exp(-4.47 x/R) decay of the disturbance. ``wall_body_length`` (None: off) scales the
-    wall panels beside a body longer than it by wall_body_length/extent
-    (:func:`_wall_and_inlet`).
+    wall panels beside a body longer than it by wall_body_length/extent, and
+    ``wall_body_panels`` (None: off) caps the body panel count that the wall panels beside the
+    body follow (:func:`_wall_and_inlet`).
     """
 
     n_modes: int
@@ -133,6 +134,7 @@ class DropDiscretisation:
     quad_tol: float = DEFAULT_TOL
     tube_tol: float = 1e-12
     wall_body_length: float | None = None
+    wall_body_panels: int | None = None
 
 
 def _drop_breaks(curve: SpectralCurve, n_panels: int) -> np.ndarray:
@@ -159,8 +161,10 @@ def _wall_and_inlet(curve: SpectralCurve, disc: DropDiscretisation, p: int):
     half = wall_half_length(max(-xr, xf), disc.tube_tol)
     refinement = max(disc.n_panels / 8.0, 0.5) * disc.wall_refinement
     flat_refinement = refinement
+    if disc.wall_body_panels is not None and disc.n_panels > disc.wall_body_panels:
+        flat_refinement *= disc.wall_body_panels / disc.n_panels
     if disc.wall_body_length is not None and xf - xr > disc.wall_body_length:
-        flat_refinement = refinement * disc.wall_body_length / (xf - xr)
+        flat_refinement *= disc.wall_body_length / (xf - xr)
     wall, inlet = tube_panels(gap=1.0 - curve.max_radius(), half_length=half,
                               refinement=refinement, flat=(xr - 0.2, xf + 0.2), p=p,
                               flat_refinement=flat_refinement)

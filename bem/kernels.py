@@ -512,7 +512,7 @@ def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, se
                         self_node, fixed, st, sw, sell, out)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def influence_matrix_serial(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol,
                             self_node, fixed, st, sw, sell, out):
     """:func:`influence_matrix` on the calling thread (for small blocks, where starting the
@@ -595,7 +595,7 @@ def cross_influence_matrix(ax, ar, aw, acx, acr, bx, br, bw_, bcx, bcr, tn, bw, 
                       near, tol, out_ab, out_ba)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def cross_influence_matrix_serial(ax, ar, aw, acx, acr, bx, br, bw_, bcx, bcr, tn, bw, gx, gw,
                                   near, tol, out_ab, out_ba):
     """:func:`cross_influence_matrix` on the calling thread (small blocks)."""

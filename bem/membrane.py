@@ -64,14 +64,20 @@ def mean_curvature_series(curve: SpectralCurve, n_points: int | None = None) -> 
 
 
 def _cos_series(c, tau, deriv=0):
-    """sum_k c_k d^n/dtau^n cos(k pi tau), n = deriv in 0, 1, 2 (tau an array)."""
-    k = np.pi * np.arange(c.size)
-    th = np.multiply.outer(np.asarray(tau, dtype=float), k)
+    """sum_k c_k d^n/dtau^n cos(k pi tau), k = 0..len(c)-1, n = deriv in 0, 1, 2 (tau an
+    array), by the Clenshaw recurrences of :mod:`bem.shape` (the derivative series are the
+    sine and cosine series of k c_k and k^2 c_k)."""
+    from .shape import _cosine_sum, _sine_clenshaw
+
+    c = np.asarray(c, dtype=float)
+    tau = np.asarray(tau, dtype=float)
+    th = np.pi * tau
+    k = np.arange(1, c.size)
     if deriv == 0:
-        return np.cos(th) @ c
+        return c[0] + _cosine_sum(c[1:], th)
     if deriv == 1:
-        return -np.sin(th) @ (k * c)
-    return -np.cos(th) @ (k * k * c)
+        return -np.pi * _sine_clenshaw(k * c[1:], th) * np.sin(th)
+    return -np.pi**2 * _cosine_sum(k * k * c[1:], th)
 
 
 def _g_and_derivative(curve: SpectralCurve, tau):

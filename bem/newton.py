@@ -62,6 +62,13 @@ def _budgeted(fun, deadline, best: list):
         if not best or norm < best[0]:
             best[:] = [norm, np.array(z, dtype=float), F, payload]
         return F, payload
+
+    if hasattr(fun, "many"):
+        def many(points):
+            if best and deadline.expired():
+                raise _Expired
+            return fun.many(points)
+        wrapped.many = many
     return wrapped
 
 
@@ -102,25 +109,42 @@ class LMReport:
     jacobian: np.ndarray | None = None       # the last (difference or updated) Jacobian at z
 
 
+def _residuals(fun, points) -> list:
+    """F at each of ``points`` (None where ``fun`` rejects the shape): ``fun.many(points)`` if
+    ``fun`` has it (independent evaluations that may run concurrently), else one by one."""
+    many = getattr(fun, "many", None)
+    if many is not None:
+        return many(points)
+    out = []
+    for zz in points:
+        try:
+            out.append(fun(zz)[0])
+        except InvalidParameterError:
+            out.append(None)
+    return out
+
+
 def difference_jacobian(fun, z, F, fd_step, exact):
     """Forward-difference Jacobian; columns in ``exact`` (index -> column) are not differenced;
-    a step that makes the shape invalid is taken backwards."""
+    a step that makes the shape invalid is taken backwards. The forward points are evaluated
+    together (:func:`_residuals`)."""
     J = np.empty((F.size, z.size))
-    n_eval = 0
-    for j in range(z.size):
-        if j in exact:
-            J[:, j] = exact[j]
-            continue
-        h = fd_step * max(1.0, abs(z[j]))
+    for j, col in exact.items():
+        J[:, j] = col
+    todo = [j for j in range(z.size) if j not in exact]
+    steps = [fd_step * max(1.0, abs(z[j])) for j in todo]
+    points = []
+    for j, h in zip(todo, steps):
         z2 = z.copy()
         z2[j] += h
-        try:
-            F2, _ = fun(z2)
-        except InvalidParameterError:
+        points.append(z2)
+    n_eval = len(points)
+    for j, h, z2, F2 in zip(todo, steps, points, _residuals(fun, points)):
+        if F2 is None:
             z2[j] -= 2.0 * h
             F2, _ = fun(z2)
             h = -h
-        n_eval += 1
+            n_eval += 1
         J[:, j] = (F2 - F) / h
     return J, n_eval
 
@@ -272,14 +296,13 @@ def _directional_update(fun, z, F, J, Q, fd_step):
     backwards. Returns (J, evaluations)."""
     h = fd_step * max(1.0, float(np.max(np.abs(z))))
     JQ = np.empty((F.size, Q.shape[1]))
-    n_eval = 0
-    for i in range(Q.shape[1]):
-        n_eval += 1
-        try:
-            JQ[:, i] = (fun(z + h * Q[:, i])[0] - F) / h
-        except InvalidParameterError:
+    n_eval = Q.shape[1]
+    for i, Fi in enumerate(_residuals(fun, [z + h * Q[:, i] for i in range(Q.shape[1])])):
+        if Fi is None:
             n_eval += 1
             JQ[:, i] = (F - fun(z - h * Q[:, i])[0]) / h
+        else:
+            JQ[:, i] = (Fi - F) / h
     return J + (JQ - J @ Q) @ Q.T, n_eval
 
 

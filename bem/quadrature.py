@@ -27,7 +27,9 @@ The heavy lifting is in :mod:`bem.kernels`; this module builds the rule tables a
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cache
 
@@ -73,6 +75,26 @@ AXIS_CLEARANCE = 1.0
 #: numba's parallel region costs more than such a block (measured on the 2 shared cores at load
 #: 5: the vesicle's inlet block, 176 x 48, 0.74 ms on one thread, 4-8 ms on two)
 SERIAL_WORK = 40_000
+
+_ON_THIS_THREAD = threading.local()
+
+
+@contextmanager
+def serial_assembly():
+    """Assemble every block on the calling thread (the serial numba kernels, which release the
+    GIL) for the duration of a ``with`` block: for threads that each run whole BEM evaluations
+    (:func:`bem.vesicle._solve_level` evaluates the difference-Jacobian columns two at a time);
+    numba's default threading layer must not be entered from two threads at once."""
+    before = getattr(_ON_THIS_THREAD, "serial", False)
+    _ON_THIS_THREAD.serial = True
+    try:
+        yield
+    finally:
+        _ON_THIS_THREAD.serial = before
+
+
+def _serial(work: int) -> bool:
+    return work < SERIAL_WORK or getattr(_ON_THIS_THREAD, "serial", False)
 
 
 @cache
@@ -296,7 +318,7 @@ def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NE
         fixed[:] = False
     st, sw, sell = self_rule(p)
     out = np.empty((2 * tx.size, 2 * n))
-    kernel = (kernels.influence_matrix_serial if tx.size * n < SERIAL_WORK
+    kernel = (kernels.influence_matrix_serial if _serial(tx.size * n)
               else kernels.influence_matrix)
     kernel(tx, tr, panels.x, panels.r, panels.w, panels.cx, panels.cr, t, barycentric_weights(p),
            gx, gw, as_near, as_tol, self_node, fixed, st, sw, sell, out)
@@ -325,7 +347,7 @@ def influence_pair(a: PanelSet, b: PanelSet, *, near: float | None = NEAR_FACTOR
     gx, gw = gauss_table()
     out_ab = np.empty((2 * a.n_nodes, 2 * b.n_nodes))
     out_ba = np.empty((2 * b.n_nodes, 2 * a.n_nodes))
-    kernel = (kernels.cross_influence_matrix_serial if a.n_nodes * b.n_nodes < SERIAL_WORK
+    kernel = (kernels.cross_influence_matrix_serial if _serial(a.n_nodes * b.n_nodes)
               else kernels.cross_influence_matrix)
     kernel(a.x, a.r, a.w, a.cx, a.cr, b.x, b.r, b.w, b.cx, b.cr, t, barycentric_weights(p), gx,
            gw, as_near, as_tol, out_ab, out_ba)

@@ -56,24 +56,20 @@ def _gauss01(m: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _sine_clenshaw(c: np.ndarray, theta):
     """b_1 of the Clenshaw recurrence, so that sum_k c_k sin(k theta) = b_1 sin(theta)."""
+    from . import series  # lazy: the input checks of the solvers run before numba loads
+
     theta = np.asarray(theta, dtype=float)
-    two_cos = 2.0 * np.cos(theta)
-    b1 = np.zeros_like(theta)
-    b2 = np.zeros_like(theta)
-    for ck in c[::-1]:
-        b1, b2 = ck + two_cos * b1 - b2, b1
-    return b1
+    c = np.ascontiguousarray(c, dtype=float)
+    return series.sine_clenshaw(c, np.ascontiguousarray(theta).ravel()).reshape(theta.shape)
 
 
 def _cosine_sum(d: np.ndarray, theta):
     """sum_{k=1}^N d_k cos(k theta) by the Clenshaw recurrence (0 for empty d)."""
+    from . import series
+
     theta = np.asarray(theta, dtype=float)
-    cos = np.cos(theta)
-    b1 = np.zeros_like(theta)
-    b2 = np.zeros_like(theta)
-    for dk in d[::-1]:
-        b1, b2 = dk + 2.0 * cos * b1 - b2, b1
-    return b1 * cos - b2
+    d = np.ascontiguousarray(d, dtype=float)
+    return series.cosine_sum(d, np.ascontiguousarray(theta).ravel()).reshape(theta.shape)
 
 
 def _as_coefficients(name, value, allow_empty):
@@ -213,12 +209,13 @@ class SpectralCurve:
         k = np.arange(owner.size) - first[owner]
         h = gaps[owner] / pieces[owner]
         start = us[owner] - gaps[owner] + k * h
-        phi, g = self._phi(start[:, None] + h[:, None] * t, front)
-        ic = np.zeros(us.size)
-        is_ = np.zeros(us.size)
-        np.add.at(ic, owner, h * ((g * np.cos(phi)) @ w))
-        np.add.at(is_, owner, h * ((g * np.sin(phi)) @ w))
-        ic, is_ = np.cumsum(ic), np.cumsum(is_)
+        from . import series
+
+        c, a = self._pole_coefficients(front)
+        gc, gs = series.pole_angle_terms(np.ascontiguousarray(c), np.ascontiguousarray(a),
+                                  (start[:, None] + h[:, None] * t).ravel())
+        ic = np.cumsum(np.bincount(owner, h * (gc.reshape(-1, t.size) @ w), us.size))
+        is_ = np.cumsum(np.bincount(owner, h * (gs.reshape(-1, t.size) @ w), us.size))
         pos = us > 0.0
         c = np.where(pos, ic / np.where(pos, us, 1.0), self._phi(np.zeros(1), front)[1][0])
         sn = np.where(pos, is_ / np.where(pos, us, 1.0), 0.0)

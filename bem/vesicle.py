@@ -28,7 +28,8 @@ Method:
   shape they are the linear least-squares solution (variable projection, Golub & Pereyra 1973),
   so the nonlinear unknowns are the N - 2 free shape modes.
 * the weighted residual :math:`\sqrt{w_i}(u_i - V e_x)` (both components) is minimised by
-  Levenberg–Marquardt with a forward-difference Jacobian and Broyden updates
+  Levenberg–Marquardt with a forward-difference Jacobian (its points evaluated concurrently,
+  :func:`_residuals`) and Broyden updates
   (:func:`bem.newton.levenberg_marquardt`, shared with the drop; a level on the density of the
   level below starts from that level's Jacobian interpolated to its nodes and differences only
   its new modes, :func:`_prolonged_columns`: at (0.9, 1.0) 57 BEM evaluations instead of 113,
@@ -120,7 +121,17 @@ Solver paths, before → after (each remaining one with its reason):
   count → the same, lengthened by ``WALL_BODY_LENGTH``/extent beside a vesicle longer than
   6 R, whose panel count grows with its length (at a fixed 64-mode shape of (0.6, 1.94):
   outputs within 4e-9, 1.7 times fewer wall nodes; with 5 R, 0.37 s → 0.20 s per evaluation
-  at 88 modes).
+  at 88 modes), and following at most ``WALL_BODY_PANELS`` = 16 membrane panels (48 modes;
+  outputs within 1e-8 of a wall refined twice, measurements at the constant; the default
+  solve at (0.6, 1.94): 165 s → 114 s, the same 1749 BIE solves, outputs within 4e-8).
+* evaluations: one after the other → the points of a difference Jacobian and of a
+  directional update evaluated concurrently, one per numba thread (:func:`_residuals`; the
+  assembly serial on each thread, the products concurrent, the LAPACK calls under a lock);
+  every point starts its area secant from the same slope, so the result does not depend on
+  the thread count (the sequential secant started from the previous point's slope, which
+  made the Jacobian columns, and through them the levels' paths, depend on their order).
+  Measured on 2 cores, default solves: (0.61, 1.39) 15.3–18.6 s → 13.5 s, (0.6, 1.94)
+  228 s → 165 s (before the wall cap).
 * refinement: plain ladder to a pair (short), carriers + cross-density pair (long), pair
   (2n/3, n) (given ``n_modes``) → one consistent ladder with an extrapolated estimate; the
   carriers stay for a long vesicle's cold start, the pair for a given ``n_modes`` (its
@@ -161,7 +172,10 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
 
 import numpy as np
 import scipy.linalg as sla
@@ -181,6 +195,7 @@ from .quadrature import (
     gauss_legendre,
     influence,
     influence_pair,
+    serial_assembly,
 )
 from .shape import (
     SpectralCurve,
@@ -207,6 +222,13 @@ CA_B_MIN, CA_B_MAX = 1e-2, 1e5
 
 
 # ---------------------------------------------------------------------------- operator
+#: held around the LAPACK calls of an evaluation: two threads evaluating shapes at once
+#: (:func:`_residuals`) gave wrong wall densities from concurrent ``lu_solve`` calls on one
+#: factorisation (scipy 1.17, OpenBLAS 0.3.30: errors of order one; with the lock, or
+#: sequentially, identical results); the products between them run concurrently
+_LAPACK = threading.Lock()
+
+
 class VesicleOperator(DropOperator):
     """Velocity of a membrane of given shape in the tube, tension and V by least squares.
 
@@ -243,10 +265,11 @@ class VesicleOperator(DropOperator):
                 best, j_best = d, j
         return j_best
 
-    def curve(self, modes) -> SpectralCurve:
+    def curve(self, modes, slope: float | None = None) -> SpectralCurve:
         """Closed, centred curve of the vesicle's volume and area; ``modes[area_mode]`` is
         replaced by the value that gives the area (secant iteration from the given value, its
-        first step with the slope dA/dc of the previous call)."""
+        first step with the slope dA/dc ``slope``, default that of the previous call; a given
+        slope is not stored, so that concurrent calls do not depend on each other)."""
         m = np.array(modes, dtype=float)
         j = self.area_mode
         x0 = m[j]
@@ -254,14 +277,15 @@ class VesicleOperator(DropOperator):
         f0 = c.area() - self.area
         if abs(f0) < 1e-14 * self.area:
             return c
-        slope = self._area_slope
+        keep = slope is None
+        slope = self._area_slope if keep else slope
         x1 = x0 - f0 / slope if slope else x0 + 1e-4 * max(1.0, abs(x0))
         for _ in range(40):
             m[j] = x1
             c = self._raw_curve(m)
             f1 = c.area() - self.area
             if abs(f1) < 1e-14 * self.area:
-                if f1 != f0 and x1 != x0:
+                if keep and f1 != f0 and x1 != x0:
                     self._area_slope = (f1 - f0) / (x1 - x0)
                 return c
             if f1 == f0:
@@ -316,8 +340,9 @@ class VesicleOperator(DropOperator):
         S_wd, B = influence_pair(self.wall, drop, tol=tol)
         inl = influence(drop.x.ravel(), rb, self.inlet, tol=tol)
         col_dp = inl[:, 0::2].sum(axis=1) / _EIGHT_PI
-        qw = -sla.lu_solve(self.lu_wall, (S_wd @ Q) / _EIGHT_PI
-                           + np.outer(self.col_dp_wall, dp), check_finite=False)
+        rhs = (S_wd @ Q) / _EIGHT_PI + np.outer(self.col_dp_wall, dp)
+        with _LAPACK:
+            qw = -sla.lu_solve(self.lu_wall, rhs, check_finite=False)
         Uc = (S_dd @ Q) / _EIGHT_PI + (B @ qw) / _EIGHT_PI + np.outer(col_dp, dp)
         u0 = Uc[:, 0].copy()
         u0[0::2] += poiseuille(rb)
@@ -332,11 +357,12 @@ class VesicleOperator(DropOperator):
         ex = np.zeros(2 * nd)
         ex[0::2] = 1.0
         M = np.column_stack([Ug, -ex]) * sw[:, None]
-        sol, *_ = sla.lstsq(M, -u0 * sw, cond=1e-13, lapack_driver="gelsy")
+        with _LAPACK:
+            sol, *_ = sla.lstsq(M, -u0 * sw, cond=1e-13, lapack_driver="gelsy")
+            self.evaluations += 1
         F = u0 * sw + M @ sol
         g, V = sol[:-1], float(sol[-1])
         res = F / sw
-        self.evaluations += 1
         return {"curve": curve, "panels": drop, "F": F, "g": g, "V": V,
                 "dp": float(dp0 + dpg @ g), "residual": float(np.max(np.abs(res))),
                 "res_x": res[0::2], "res_r": res[1::2]}
@@ -362,13 +388,25 @@ WALL_REFINEMENT = 0.25
 #: another path, 566 BIE solves instead of 454
 WALL_BODY_LENGTH = 6.0
 
+#: membrane panel count above which the wall panels beside the vesicle stop following it
+#: (:attr:`bem.drop.DropDiscretisation.wall_body_panels`): the wall's share of the error is
+#: already far below the ladder's there. Measured on fixed shapes at Ca_B = 50 against a wall
+#: refined twice (outputs V/U, Δp⁺, γ_max, relative): (0.6, 0.98 lam_c) 64 / 96 modes ≤ 7.8e-9
+#: / 9.3e-10 (unlimited: 3.8e-9 / 1.7e-10), and ≤ 3.5e-9 on the stored map shapes (0.9, 0.98
+#: lam_c), (0.7, 0.95 lam_c), (0.6, 0.8 lam_c), (0.6, 0.95 lam_c) at their own mode count and
+#: 80 modes; the largest wall shear on the nodes moves by up to 5.8e-4 (sampling of its peak;
+#: 6.7e-5 unlimited). One evaluation at 96 modes of (0.6, 0.98 lam_c): 0.21 s → 0.14 s (wall
+#: nodes 1792 → 976)
+WALL_BODY_PANELS = 16
+
 
 def vesicle_discretisation(n_modes: int, order: int = DEFAULT_ORDER,
                            n_panels: int | None = None) -> DropDiscretisation:
     """Resolution of a vesicle level with ``n_modes`` shape modes (panels as for the drop)."""
     return DropDiscretisation(n_modes=n_modes, n_panels=n_panels or _panels_for(n_modes),
                               order=order, wall_refinement=WALL_REFINEMENT,
-                              wall_body_length=WALL_BODY_LENGTH)
+                              wall_body_length=WALL_BODY_LENGTH,
+                              wall_body_panels=WALL_BODY_PANELS)
 
 
 # ---------------------------------------------------------------------------- initial shapes
@@ -538,6 +576,36 @@ def _prolonged_columns(coarse: VesicleOperator, coarse_state: dict, op: VesicleO
     return {jf: Gf[:, where[m]] for jf, m in enumerate(free_f) if m in where}
 
 
+def _workers() -> int:
+    """Threads for independent evaluations: numba's thread count (NUMBA_NUM_THREADS, or
+    :func:`numba.set_num_threads`), so that one setting bounds both."""
+    import numba
+
+    return max(1, int(numba.get_num_threads()))
+
+
+def _residuals(op: VesicleOperator, modes_list) -> list:
+    """Weighted residuals F of the shapes ``modes_list`` (None where the operator rejects one),
+    evaluated ``_workers()`` at a time, each on one thread (serial assembly; the products and
+    kernels release the GIL). Every shape starts its area secant from the same slope, so the
+    result does not depend on the number of threads or on the order. Measured at (0.6, 1.94),
+    96 modes, on 2 cores: 0.13 s per evaluation against 0.19 s one after the other."""
+    slope = op._area_slope
+
+    def one(modes, serial=True):
+        with serial_assembly() if serial else nullcontext(), single_threaded_blas():
+            try:
+                return op.evaluate(op.curve(modes, slope=slope))["F"]
+            except InvalidParameterError:
+                return None
+
+    workers = min(_workers(), len(modes_list))
+    if workers <= 1:
+        return [one(m, serial=False) for m in modes_list]
+    with ThreadPoolExecutor(workers) as pool:
+        return list(pool.map(one, modes_list))
+
+
 def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, max_iter,
                  seed_level=False, valley=False, carrier=False, deadline=None, coarse=None):
     """Levenberg–Marquardt at one resolution from ``seed``
@@ -556,6 +624,8 @@ def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, m
     def fun(z):
         st = op.evaluate(op.curve(op.full(z, template)))
         return st["F"], st
+
+    fun.many = lambda points: _residuals(op, [op.full(z, template) for z in points])
 
     z0, start, J0, extra = op.free(template), None, None, 0
     if coarse is not None and not (deadline is not None and deadline.expired()):

@@ -4,6 +4,8 @@ Reference: scipy.optimize.least_squares (trust-region reflective, analytic Jacob
 1e-15), an independent implementation.
 """
 
+import math
+
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
@@ -91,3 +93,36 @@ def test_supplied_jacobian_reaches_the_minimiser_without_a_difference_jacobian()
     # the fixed point of steps with a Jacobian 1e-3 off lies ~1e-7 from the minimiser
     np.testing.assert_allclose(rep.z, z_ref, atol=1e-6)
     assert rep.jacobian is not None and rep.jacobian.shape == J0.shape
+
+
+def test_difference_jacobian_with_batched_points_equals_the_one_by_one_columns():
+    """``fun.many`` (the vesicle's concurrent evaluations) gives the columns of the plain loop,
+    and a point it rejects is differenced backwards as before."""
+    from bem.newton import difference_jacobian
+
+    def fun(z):
+        if z[1] > 1.0 + 5e-8:                       # a forward step on z[1] is rejected
+            raise InvalidParameterError("z", z, "z[1] <= 1")
+        return np.array([z[0] ** 2, z[0] * z[1], np.sin(z[1]), z[0] + z[1] ** 3]), None
+
+    def batched(z):
+        return fun(z)
+
+    def many(points):
+        out = []
+        for p in points:
+            try:
+                out.append(fun(p)[0])
+            except InvalidParameterError:
+                out.append(None)
+        return out
+
+    batched.many = many
+    z = np.array([0.7, 1.0])
+    F, _ = fun(z)
+    J1, n1 = difference_jacobian(fun, z, F, 1e-7, {})
+    J2, n2 = difference_jacobian(batched, z, F, 1e-7, {})
+    exact = np.array([[1.4, 0.0], [1.0, 0.7], [0.0, math.cos(1.0)], [1.0, 3.0]])
+    assert n1 == n2 == 3                                 # two columns, one taken backwards
+    np.testing.assert_array_equal(J1, J2)
+    np.testing.assert_allclose(J2, exact, atol=1e-6)

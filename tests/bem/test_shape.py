@@ -219,3 +219,27 @@ def test_pole_integrals_match_one_fine_gauss_rule_per_point():
                 ic, is_ = c._integrals(u, front)
                 assert np.max(np.abs(ic - (g * np.cos(phi)) @ w)) < 5e-14
                 assert np.max(np.abs(is_ - (g * np.sin(phi)) @ w)) < 5e-14
+
+
+@given(st.lists(st.floats(-2.0, 2.0), min_size=0, max_size=40),
+       st.lists(st.floats(-4.0, 4.0), min_size=1, max_size=30))
+def test_clenshaw_sums_equal_the_direct_trigonometric_sums(coeffs, angles):
+    """The numba Clenshaw kernels of the curve against sum_k c_k sin(k theta) and
+    sum_k c_k cos(k theta) summed term by term (numpy), to rounding."""
+    from bem.series import cosine_sum, pole_angle_terms, sine_clenshaw
+
+    c, th = np.array(coeffs, dtype=float), np.array(angles, dtype=float)
+    k = np.arange(1, c.size + 1)
+    sines = np.sin(np.outer(th, k)) @ c
+    cosines = np.cos(np.outer(th, k)) @ c
+    scale = 1.0 + np.sum(np.abs(c)) * (1.0 + k.size)
+    assert np.max(np.abs(sine_clenshaw(c, th) * np.sin(th) - sines), initial=0.0) < 1e-13 * scale
+    assert np.max(np.abs(cosine_sum(c, th) - cosines), initial=0.0) < 1e-13 * scale
+    # the position integrands: phi = pi u - sum c_k sin(k pi u), g = 1 + sum a_j cos(j pi u)
+    u = th / np.pi
+    a = 0.1 * c[:5]
+    phi = np.pi * u - np.sin(np.outer(np.pi * u, k)) @ c
+    g = 1.0 + np.cos(np.outer(np.pi * u, np.arange(1, a.size + 1))) @ a
+    gc, gs = pole_angle_terms(c, a, u)
+    assert np.max(np.abs(gc - g * np.cos(phi))) < 1e-13 * scale
+    assert np.max(np.abs(gs - g * np.sin(phi))) < 1e-13 * scale

@@ -4,7 +4,8 @@ machine and its load).
 Run with ``python tests/benchmarks/bench_vesicle.py [--cases short,rbc,long,sweep] [--repeats 3]
 [--json FILE]`` (``make benchmark`` runs every case three times). Each run is a fresh
 interpreter (numba cache warm, compiled by a small solve before the clock starts), one at a
-time, so that its peak resident memory (``ru_maxrss``) is its own. The table gives the minimum
+time, so that its peak resident memory (``ru_maxrss``) is its own; ``threads`` records numba's
+thread count, which also bounds the concurrent Jacobian evaluations of the solver. The table gives the minimum
 and median wall time of the runs, the number of boundary-integral solves (BEM evaluations,
 continuation rungs included; the same in every run) beside the 10^4-10^5 semi-implicit time
 steps of Chen et al. 2020 (one BIE solve each), and the solution with its error estimate.
@@ -38,6 +39,7 @@ CASES = {"short": (0.9, 1.0, 4.0), "rbc": (0.61, 1.39, 15.0), "long": (0.6, 1.94
 
 _CHILD = """
 import json, resource, time
+import numba
 import numpy as np
 from bem.sweep import sweep_vesicle
 from bem.vesicle import solve_vesicle
@@ -55,7 +57,8 @@ print(json.dumps({{"wall_s": wall, "bie_solves": sum(p.bie_solves for p in out),
                   "tension_max": r.tension_max, "residual": r.residual,
                   "error": r.error_estimate, "modes": r.panels.get("modes"),
                   "messages": [p.message for p in out if not p.success],
-                  "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}}))
+                  "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                  "threads": numba.get_num_threads()}}))
 """
 
 

@@ -1,0 +1,78 @@
+r"""Numba back-end of :mod:`bem.shape`: the Clenshaw sums of the sine and cosine series of a
+generating curve (tangent angle and arc-length density), evaluated at many parameters.
+
+Each kernel takes the coefficients and the angles :math:`\theta` as flat float arrays, does no
+validation and returns a new array. The recurrence (Clenshaw 1955; Press et al., *Numerical
+Recipes* §5.5) is the one the numpy version of :mod:`bem.shape` ran, term by term, as one array
+operation per coefficient; here the loop over coefficients runs inside the loop over angles.
+Measured on the red blood cell solve (0.61, 1.39): the curve work (closed curves, sampling,
+curvatures) was 35 % of the solve's time with the numpy recurrence.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+__all__ = ["cosine_sum", "sine_clenshaw", "pole_angle_terms"]
+
+
+@numba.njit(cache=True, nogil=True)
+def sine_clenshaw(c, theta):
+    """b_1 of the Clenshaw recurrence, so that sum_k c_k sin(k theta) = b_1 sin(theta)."""
+    out = np.empty(theta.size)
+    n = c.size
+    for i in range(theta.size):
+        two_cos = 2.0 * math.cos(theta[i])
+        b1 = 0.0
+        b2 = 0.0
+        for k in range(n - 1, -1, -1):
+            b1, b2 = c[k] + two_cos * b1 - b2, b1
+        out[i] = b1
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def cosine_sum(d, theta):
+    """sum_{k=1}^N d_k cos(k theta) (0 for empty d)."""
+    out = np.empty(theta.size)
+    n = d.size
+    for i in range(theta.size):
+        cs = math.cos(theta[i])
+        b1 = 0.0
+        b2 = 0.0
+        for k in range(n - 1, -1, -1):
+            b1, b2 = d[k] + 2.0 * cs * b1 - b2, b1
+        out[i] = b1 * cs - b2
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def pole_angle_terms(c, a, u):
+    r"""(g cos phi, g sin phi) at parameter distances ``u`` from a pole, with the pole angle
+    :math:`\phi = \pi u - b_1\sin\pi u` (b_1 the sine sum of ``c``) and the density
+    :math:`g = 1 + \sum_j a_j\cos(j\pi u)`: the integrands of the curve's position."""
+    gc = np.empty(u.size)
+    gs = np.empty(u.size)
+    nc = c.size
+    na = a.size
+    for i in range(u.size):
+        th = math.pi * u[i]
+        cs = math.cos(th)
+        b1 = 0.0
+        b2 = 0.0
+        for k in range(nc - 1, -1, -1):
+            b1, b2 = c[k] + 2.0 * cs * b1 - b2, b1
+        phi = th - b1 * math.sin(th)
+        g = 1.0
+        if na:
+            d1 = 0.0
+            d2 = 0.0
+            for k in range(na - 1, -1, -1):
+                d1, d2 = a[k] + 2.0 * cs * d1 - d2, d1
+            g += d1 * cs - d2
+        gc[i] = g * math.cos(phi)
+        gs[i] = g * math.sin(phi)
+    return gc, gs
