@@ -466,7 +466,7 @@ MODE_CONVERGED_06_194 = {"V_over_U": (1.0207879 - 2.40e-5 * 0.22 / 0.78, 6.8e-6)
                          "tension_max": (1009.85 + 2.55 * 0.33 / 0.67, 1.26)}
 
 
-@pytest.mark.slow          # ~4 min on 2 loaded cores
+@pytest.mark.slow          # ~2 min on 2 cores
 def test_default_solve_converges_at_nu_0p6_lam_1p94(report):
     """The hardest default case, (0.6, 1.94), lam/lam_c = 0.979, Ca_B = 50, with default
     options: converged, and the estimated error of each output is at least its distance from

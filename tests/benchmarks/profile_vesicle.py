@@ -15,11 +15,17 @@ updates, damped LM trial steps, other: initial point and extrapolation) per leve
 SpectralCurve rows below the table are inclusive and count every caller.
 
 (b) The cost of ONE evaluation (``VesicleOperator.evaluate`` of a fixed shape: the lubrication
-shape at (0.9, 1.0), Ca_B = 50, fitted with N modes) and of one Newton step (one difference
-Jacobian plus one damped LM step), with the solver's BLAS threading (:mod:`bem.threads`),
-against N, with the panels of :func:`bem.vesicle.vesicle_discretisation` (N), and the fitted
-exponent p of time ~ N^p. The evaluation times are minima over ``--repeats``; the per-category columns are minima per
-category (their sum can be below the minimum total).
+shape at ``--scaling-case`` (default (0.9, 1.0)), Ca_B = 50, fitted with N modes) and of one
+Newton step (one difference Jacobian, its points evaluated concurrently as in the solver, plus
+one damped LM step), with the solver's BLAS threading (:mod:`bem.threads`), against N, with
+the panels of :func:`bem.vesicle.vesicle_discretisation` (N), and the fitted exponent p of
+time ~ N^p. The evaluation times are minima over ``--repeats``; the per-category columns are
+minima per category (their sum can be below the minimum total). ``--json
+docs/data/evaluation_scaling.json`` stores the table for docs/validation.md.
+
+With concurrent evaluations (numba's thread count > 1) the per-category rows of (a) are thread
+times and the Newton rows include the wait for the worker threads, so the rows add up to
+more than the wall time.
 
 Timings are wall-clock and depend on the load of the machine: compare BIE solves and evaluation
 counts, which do not. Numba is compiled (warm cache) before anything is timed. The library is
@@ -423,6 +429,10 @@ def main(argv=None) -> None:
     ap.add_argument("--residual-tol", type=float, default=None,
                     help="steady residual tolerance of every --case solve [U] (default: the "
                          "solver's)")
+    ap.add_argument("--scaling-case", nargs=2, type=float, default=(0.9, 1.0),
+                    metavar=("NU", "LAM"),
+                    help="(nu, lam) of the scaling table (b): its lubrication shape is fitted "
+                         "with each mode count (default 0.9 1.0)")
     ap.add_argument("--modes", default="16,24,32,48,64",
                     help="shape modes of the scaling table (b), comma separated (default "
                          "16,24,32,48,64)")
@@ -453,9 +463,15 @@ def main(argv=None) -> None:
             out["solves"].append(d)
     if not args.no_scaling:
         modes = [int(m) for m in args.modes.split(",")]
-        print(f"\n(b) scaling at (0.9, 1.0), Ca_B = {args.ca_b:g} ({_load()})")
+        nu, lam = args.scaling_case
+        print(f"\n(b) scaling at ({nu:g}, {lam:g}), Ca_B = {args.ca_b:g} ({_load()})")
         out["scaling"] = profile_scaling(modes, args.repeats, not args.no_newton,
-                                         ca_b=args.ca_b)
+                                         nu=nu, lam=lam, ca_b=args.ca_b)
+        out["scaling_case"] = {"nu": nu, "lam": lam, "ca_b": args.ca_b,
+                               "threads": numba.get_num_threads(), "load": _load()}
+        ns = [r["modes"] for r in out["scaling"]]
+        out["scaling_exponent"] = {k: _fit(ns, [r[k] for r in out["scaling"]])
+                                   for k in ("eval_s", "newton_s")}
         print_scaling(out["scaling"], args.repeats)
     print(f"\n{_load()}")
     if args.json:
