@@ -16,7 +16,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["cosine_sum", "sine_clenshaw", "pole_angle_terms"]
+__all__ = ["cosine_sum", "pole_integrals", "pole_terms", "sine_clenshaw"]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -50,29 +50,59 @@ def cosine_sum(d, theta):
 
 
 @numba.njit(cache=True, nogil=True)
-def pole_angle_terms(c, a, u):
-    r"""(g cos phi, g sin phi) at parameter distances ``u`` from a pole, with the pole angle
+def pole_terms(c, a, u):
+    r"""(g cos phi, g sin phi) at one parameter distance ``u`` from a pole, with the pole angle
     :math:`\phi = \pi u - b_1\sin\pi u` (b_1 the sine sum of ``c``) and the density
     :math:`g = 1 + \sum_j a_j\cos(j\pi u)`: the integrands of the curve's position."""
-    gc = np.empty(u.size)
-    gs = np.empty(u.size)
-    nc = c.size
-    na = a.size
-    for i in range(u.size):
-        th = math.pi * u[i]
-        cs = math.cos(th)
-        b1 = 0.0
-        b2 = 0.0
-        for k in range(nc - 1, -1, -1):
-            b1, b2 = c[k] + 2.0 * cs * b1 - b2, b1
-        phi = th - b1 * math.sin(th)
-        g = 1.0
-        if na:
-            d1 = 0.0
-            d2 = 0.0
-            for k in range(na - 1, -1, -1):
-                d1, d2 = a[k] + 2.0 * cs * d1 - d2, d1
-            g += d1 * cs - d2
-        gc[i] = g * math.cos(phi)
-        gs[i] = g * math.sin(phi)
-    return gc, gs
+    th = math.pi * u
+    cs = math.cos(th)
+    b1 = 0.0
+    b2 = 0.0
+    for k in range(c.size - 1, -1, -1):
+        b1, b2 = c[k] + 2.0 * cs * b1 - b2, b1
+    phi = th - b1 * math.sin(th)
+    g = 1.0
+    if a.size:
+        d1 = 0.0
+        d2 = 0.0
+        for k in range(a.size - 1, -1, -1):
+            d1, d2 = a[k] + 2.0 * cs * d1 - d2, d1
+        g += d1 * cs - d2
+    return g * math.cos(phi), g * math.sin(phi)
+
+
+@numba.njit(cache=True, nogil=True)
+def pole_integrals(c, a, us, t, w, pieces_per_u):
+    r"""(int_0^1 g cos phi dt, int_0^1 g sin phi dt) with argument u t at the sorted distances
+    ``us`` from a pole: the integrals from 0 to u divided by u, accumulated gap by gap between
+    neighbours, each gap cut into max(1, ceil(gap pieces_per_u)) pieces with the Gauss rule
+    (t, w) on [0, 1]; at u = 0 the limits (g(0), 0)."""
+    n = us.size
+    oc = np.empty(n)
+    os_ = np.empty(n)
+    ic = 0.0
+    is_ = 0.0
+    prev = 0.0
+    g0, _ = pole_terms(c, a, 0.0)
+    for i in range(n):
+        gap = us[i] - prev
+        pieces = max(1, int(math.ceil(gap * pieces_per_u)))
+        h = gap / pieces
+        for k in range(pieces):
+            start = prev + k * h
+            sc = 0.0
+            ss = 0.0
+            for j in range(t.size):
+                gc, gs = pole_terms(c, a, start + h * t[j])
+                sc += w[j] * gc
+                ss += w[j] * gs
+            ic += h * sc
+            is_ += h * ss
+        prev = us[i]
+        if us[i] > 0.0:
+            oc[i] = ic / us[i]
+            os_[i] = is_ / us[i]
+        else:
+            oc[i] = g0
+            os_[i] = 0.0
+    return oc, os_

@@ -197,28 +197,16 @@ class SpectralCurve:
         (split into pieces of at most 16 / (3 quad) in u) gets a 16-point Gauss rule, i.e. at
         least 1.5x the node density of one ``quad``-point rule over [0, 1/2], which integrates
         the band-limited integrand to round-off (tested against a 4x finer single rule)."""
+        from . import series
+
         u = np.asarray(u, dtype=float)
         flat = u.ravel()
         order = np.argsort(flat)
-        us = flat[order]
         t, w = _gauss01(16)
-        gaps = np.diff(us, prepend=0.0)
-        pieces = np.maximum(1, np.ceil(gaps * (3.0 * self._quad / 16.0))).astype(int)
-        owner = np.repeat(np.arange(us.size), pieces)
-        first = np.cumsum(pieces) - pieces
-        k = np.arange(owner.size) - first[owner]
-        h = gaps[owner] / pieces[owner]
-        start = us[owner] - gaps[owner] + k * h
-        from . import series
-
         c, a = self._pole_coefficients(front)
-        gc, gs = series.pole_angle_terms(np.ascontiguousarray(c), np.ascontiguousarray(a),
-                                  (start[:, None] + h[:, None] * t).ravel())
-        ic = np.cumsum(np.bincount(owner, h * (gc.reshape(-1, t.size) @ w), us.size))
-        is_ = np.cumsum(np.bincount(owner, h * (gs.reshape(-1, t.size) @ w), us.size))
-        pos = us > 0.0
-        c = np.where(pos, ic / np.where(pos, us, 1.0), self._phi(np.zeros(1), front)[1][0])
-        sn = np.where(pos, is_ / np.where(pos, us, 1.0), 0.0)
+        c, sn = series.pole_integrals(np.ascontiguousarray(c), np.ascontiguousarray(a),
+                                      np.ascontiguousarray(flat[order]), t, w,
+                                      3.0 * self._quad / 16.0)
         out_c, out_s = np.empty_like(flat), np.empty_like(flat)
         out_c[order], out_s[order] = c, sn
         return out_c.reshape(u.shape), out_s.reshape(u.shape)

@@ -116,7 +116,15 @@ Solver paths, before → after (each remaining one with its reason):
   ~3 % of the BIE solves at (0.6, 1.94); ending a valley level once a fresh Jacobian's step
   achieves 90 % of its promised decrease of |F|² (at (0.6, 1.94): 1358 BIE solves instead of
   1745) leaves the 72- and 80-mode levels 2e-5 (V/U) and 0.1 (Δp⁺) from their certified
-  minima, noise of the size of the differences the error estimate extrapolates.
+  minima, noise of the size of the differences the error estimate extrapolates. Also not
+  adopted: the wall solve by an explicit inverse (a product instead of the locked
+  ``lu_solve``; two concurrent evaluations at 96 modes of (0.6, 1.94) 0.086 s against
+  0.080 s); two OpenBLAS threads in an evaluation (0.25 s against 0.18 s with one, the
+  threads competing with numba's); the load columns of an evaluation that runs alone split
+  in two halves on two threads (0.120 s against 0.118 s at 96 modes: the wall solve, under
+  the lock, is half the products' time); +16 instead of +8 modes between the consistent levels of
+  a long vesicle near lam_c (64, 80, 96 at (0.6, 1.94): 82 s and 1362 BIE solves, but the
+  Δp⁺ estimate 1.1e-4 relative, above ``tol``, where the +8 ladder converges at 96 modes).
 * wall mesh: the drop's rule, wall panels beside the body following the membrane's panel
   count → the same, lengthened by ``WALL_BODY_LENGTH``/extent beside a vesicle longer than
   6 R, whose panel count grows with its length (at a fixed 64-mode shape of (0.6, 1.94):
@@ -132,6 +140,12 @@ Solver paths, before → after (each remaining one with its reason):
   made the Jacobian columns, and through them the levels' paths, depend on their order).
   Measured on 2 cores, default solves: (0.61, 1.39) 15.3–18.6 s → 13.5 s, (0.6, 1.94)
   228 s → 165 s (before the wall cap).
+* curve work (closed curves, sampling, curvatures, bending force): the Clenshaw sums in
+  numpy, one array operation per coefficient → in numba (:mod:`bem.series`; at
+  (0.61, 1.39) the curve work was 35 % of the solve). The results move by rounding, which
+  changes the unconverged carrier levels of (0.6, 1.94): 1819 BIE solves in 119 s
+  (converged at 96 modes, estimates 4.7e-5, 0.039, 4.1 for V/U, Δp⁺, γ_max against true
+  errors 5.9e-6, 0.005, 1.1).
 * refinement: plain ladder to a pair (short), carriers + cross-density pair (long), pair
   (2n/3, n) (given ``n_modes``) → one consistent ladder with an extrapolated estimate; the
   carriers stay for a long vesicle's cold start, the pair for a given ``n_modes`` (its
@@ -154,9 +168,10 @@ Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
 
 * shape modes 8 <= n_modes, max_modes, rung_modes <= :data:`MAX_MODES` = 96 (the long
   vesicle at (0.6, 0.98 λc) needs 88–96; a level of N modes has max(8, ceil(N/3)) panels
-  and a difference Jacobian costs N BEM evaluations, ~0.05–0.25 s each, so 96 modes is
-  already ~20 s per Jacobian); peak memory stays below 1 GB (measured 839 MB at
-  (0.6, 0.98 λc), 96 modes; 1.5 GB before the wall beside long vesicles was coarsened).
+  and a difference Jacobian costs N BEM evaluations, ~0.02–0.15 s each, two at a time on 2
+  cores, so 96 modes is ~8 s per Jacobian); peak memory stays below 1 GB (measured 839 MB at
+  (0.6, 0.98 λc), 96 modes, one evaluation at a time; 1.5 GB before the wall beside long
+  vesicles was coarsened).
 * :data:`CA_B_MIN` = 0.01 <= Ca_B <= :data:`CA_B_MAX` = 1e5, the range of the lubrication
   solver that provides the initial shape (:mod:`lubrication.solve`; at 1e5 bending is within
   1e-6 of the high-Ca model). Ca_B = ηUR0²/κ is ~1–1000 for red blood cells (Chen et al.

@@ -20,6 +20,7 @@ from __future__ import annotations
 import json
 import os
 import platform
+import sys
 from pathlib import Path
 
 from lubrication.io import provenance, write_json
@@ -69,3 +70,12 @@ def store(name: str, doc: dict, *, merge: str | None = None) -> Path:
         doc = {**old, **{k: v for k, v in doc.items() if k not in ("machine", "provenance")},
                merge: {**old.get(merge, {}), **entries}}
     return write_json(path, doc, indent=1, sort_keys=False)
+
+
+def run_script(main) -> None:
+    """Entry of a benchmark script: exit with ``main()``'s status; Ctrl-C and a closed pipe end
+    quietly with status 130."""
+    try:
+        sys.exit(main())
+    except (KeyboardInterrupt, BrokenPipeError):
+        sys.exit(130)

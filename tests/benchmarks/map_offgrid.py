@@ -32,7 +32,6 @@ import json
 import math
 import random
 import statistics
-import sys
 import time
 from pathlib import Path
 
@@ -209,7 +208,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main())
-    except KeyboardInterrupt:
-        sys.exit(130)
+    from bench_store import run_script
+
+    run_script(main)

@@ -251,3 +251,17 @@ def test_pack_prints_the_coverage_and_lists_the_holes(cli, tmp_path):
     assert f"(nu={hole[0]:g}, lam/lam_c={hole[1]:g}, Ca_B={hole[2]:g}): bem: " in out
     row = next(line for line in out.splitlines() if line.startswith(f"  {hole[0]:<16g}"))
     assert row.split()[1:3] == [".", "B"]       # the hole, then its BEM neighbour
+
+
+def test_build_help_states_the_default_ca_b_grid(capsys):
+    """``map build --help`` types the default Ca_B list (the parser stays free of numpy); it
+    must be the grid the build uses."""
+    import re
+
+    from correlations.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["map", "build", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    typed = re.search(r"capillary numbers [^(]*\(default ([\d. ]+)\)", text).group(1).split()
+    assert [float(v) for v in typed] == map_build.DEFAULT_GRID["ca_b"]
