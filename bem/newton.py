@@ -23,6 +23,12 @@ vesicle near lam_c, see its docstring): the same damped steps, but the Jacobian 
 up to date by differences along a few directions per step instead of all of them, and every
 second step is extrapolated along the valley (parallel tangents).
 
+Independent points: the points of a difference Jacobian and of a directional update do not
+depend on each other; if ``fun`` has an attribute ``many`` (a function of a list of points
+returning their F, None where the shape is rejected) they are handed to it together, e.g. to
+be evaluated concurrently (:func:`bem.vesicle._residuals`). The result must not depend on
+the order of evaluation.
+
 Wall-time budget: both take an optional ``deadline`` (:class:`lubrication.checks.Deadline`),
 tested before every evaluation of F after the first; once it is spent they return an
 unsuccessful report whose message is the deadline's, carrying the evaluated point of smallest
@@ -109,7 +115,7 @@ class LMReport:
     jacobian: np.ndarray | None = None       # the last (difference or updated) Jacobian at z
 
 
-def _residuals(fun, points) -> list:
+def _evaluate_points(fun, points) -> list:
     """F at each of ``points`` (None where ``fun`` rejects the shape): ``fun.many(points)`` if
     ``fun`` has it (independent evaluations that may run concurrently), else one by one."""
     many = getattr(fun, "many", None)
@@ -127,7 +133,7 @@ def _residuals(fun, points) -> list:
 def difference_jacobian(fun, z, F, fd_step, exact):
     """Forward-difference Jacobian; columns in ``exact`` (index -> column) are not differenced;
     a step that makes the shape invalid is taken backwards. The forward points are evaluated
-    together (:func:`_residuals`)."""
+    together (:func:`_evaluate_points`)."""
     J = np.empty((F.size, z.size))
     for j, col in exact.items():
         J[:, j] = col
@@ -139,7 +145,7 @@ def difference_jacobian(fun, z, F, fd_step, exact):
         z2[j] += h
         points.append(z2)
     n_eval = len(points)
-    for j, h, z2, F2 in zip(todo, steps, points, _residuals(fun, points)):
+    for j, h, z2, F2 in zip(todo, steps, points, _evaluate_points(fun, points)):
         if F2 is None:
             z2[j] -= 2.0 * h
             F2, _ = fun(z2)
@@ -297,7 +303,8 @@ def _directional_update(fun, z, F, J, Q, fd_step):
     h = fd_step * max(1.0, float(np.max(np.abs(z))))
     JQ = np.empty((F.size, Q.shape[1]))
     n_eval = Q.shape[1]
-    for i, Fi in enumerate(_residuals(fun, [z + h * Q[:, i] for i in range(Q.shape[1])])):
+    points = [z + h * Q[:, i] for i in range(Q.shape[1])]
+    for i, Fi in enumerate(_evaluate_points(fun, points)):
         if Fi is None:
             n_eval += 1
             JQ[:, i] = (F - fun(z - h * Q[:, i])[0]) / h

@@ -143,9 +143,13 @@ Solver paths, before → after (each remaining one with its reason):
 * curve work (closed curves, sampling, curvatures, bending force): the Clenshaw sums in
   numpy, one array operation per coefficient → in numba (:mod:`bem.series`; at
   (0.61, 1.39) the curve work was 35 % of the solve). The results move by rounding, which
-  changes the unconverged carrier levels of (0.6, 1.94): 1819 BIE solves in 119 s
-  (converged at 96 modes, estimates 4.7e-5, 0.039, 4.1 for V/U, Δp⁺, γ_max against true
-  errors 5.9e-6, 0.005, 1.1).
+  changes the unconverged carrier levels of (0.6, 1.94) and with them its path: with the
+  bending-force sums in numba 1819 BIE solves in 119 s (converged at 96 modes, estimates
+  4.7e-5, 0.039, 4.1 for V/U, Δp⁺, γ_max against true errors 5.9e-6, 0.005, 1.1); with the
+  position integrals in numba too 1565 BIE solves in 107 s (converged at 88 modes,
+  estimates 5.1e-5, 0.061, 3.7 against 6.8e-6, 0.002, 1.3). Which level converges is
+  decided by the unconverged carriers, not by the physics: compare BIE solves and error
+  estimates, not single timings.
 * refinement: plain ladder to a pair (short), carriers + cross-density pair (long), pair
   (2n/3, n) (given ``n_modes``) → one consistent ladder with an extrapolated estimate; the
   carriers stay for a long vesicle's cold start, the pair for a given ``n_modes`` (its
@@ -169,9 +173,10 @@ Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
 * shape modes 8 <= n_modes, max_modes, rung_modes <= :data:`MAX_MODES` = 96 (the long
   vesicle at (0.6, 0.98 λc) needs 88–96; a level of N modes has max(8, ceil(N/3)) panels
   and a difference Jacobian costs N BEM evaluations, ~0.02–0.15 s each, two at a time on 2
-  cores, so 96 modes is ~8 s per Jacobian); peak memory stays below 1 GB (measured 839 MB at
-  (0.6, 0.98 λc), 96 modes, one evaluation at a time; 1.5 GB before the wall beside long
-  vesicles was coarsened).
+  cores, so 96 modes is ~8 s per Jacobian); peak memory stays below 1 GB (measured 555 MB
+  for the default solve at (0.6, 0.98 λc), two evaluations at a time; 839 MB one at a time
+  before the wall followed at most WALL_BODY_PANELS, 1.5 GB before the wall beside long
+  vesicles was lengthened).
 * :data:`CA_B_MIN` = 0.01 <= Ca_B <= :data:`CA_B_MAX` = 1e5, the range of the lubrication
   solver that provides the initial shape (:mod:`lubrication.solve`; at 1e5 bending is within
   1e-6 of the high-Ca model). Ca_B = ηUR0²/κ is ~1–1000 for red blood cells (Chen et al.
