@@ -21,7 +21,7 @@ one damped LM step), with the solver's BLAS threading (:mod:`bem.threads`), agai
 the panels of :func:`bem.vesicle.vesicle_discretisation` (N), and the fitted exponent p of
 time ~ N^p. The evaluation times are minima over ``--repeats``; the per-category columns are
 minima per category (their sum can be below the minimum total). ``--json
-docs/data/evaluation_scaling.json`` stores the table for docs/validation.md.
+docs/data/bench_evaluation_scaling.json`` stores the table for docs/validation.md.
 
 With concurrent evaluations (numba's thread count > 1) the per-category rows of (a) are thread
 times and the Newton rows include the wait for the worker threads, so the rows add up to
