@@ -22,7 +22,7 @@ from lubrication.cli_contract import (EXIT_CHECK_FAILED, EXIT_INTERRUPTED, EXIT_
                                       Parser, UsageError, check_output_dir, check_plot_path,
                                       check_report_path,
                                       dump_json, format_rows, format_value_error,
-                                      interrupted_message,
+                                      interrupted_message, is_interrupt,
                                       non_finite_keys, one_line, options_named,
                                       quiet_broken_pipe, save_plot)
 
@@ -502,6 +502,11 @@ def main(argv=None) -> int:
         return EXIT_INTERRUPTED
     except BrokenPipeError:
         return quiet_broken_pipe()
+    except SystemError as exc:             # a Ctrl-C inside numba code (is_interrupt)
+        if not is_interrupt(exc):
+            raise
+        print(interrupted_message(prog), file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

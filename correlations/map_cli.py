@@ -34,7 +34,7 @@ def _progress(state) -> None:
 
 
 def cmd_map_build(args):
-    from lubrication.cli_contract import EXIT_INTERRUPTED, format_rows
+    from lubrication.cli_contract import EXIT_INTERRUPTED, format_rows, is_interrupt
 
     from .map_build import build_map, make_grid
     from .solution_map import read_points
@@ -63,7 +63,9 @@ def cmd_map_build(args):
                             scheduler=args.scheduler, max_time=args.max_time,
                             retry_failed=args.retry_failed, progress=_progress,
                             pack=not args.no_pack)
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, SystemError) as exc:     # SystemError: see is_interrupt
+            if not is_interrupt(exc):
+                raise
             n = len(read_points(args.out)) if args.out else 0
             print(f"vesicle-tube map build: interrupted; {n} points stored in {args.out} (every "
                   "file complete); run the same command again to resume", file=sys.stderr)

@@ -40,7 +40,7 @@ __all__ = ["EXIT_OK", "EXIT_NOT_CONVERGED", "EXIT_INVALID", "EXIT_INTERRUPTED",
            "format_value", "format_value_error", "REPORT_FORMATS", "check_report_path",
            "check_output_dir", "check_plot_path", "save_plot", "non_finite_keys", "dump_json",
            "finite_float", "positive_int", "add_max_time_option", "add_map_option", "one_line",
-           "options_named"]
+           "options_named", "is_interrupt", "interrupted_message"]
 
 
 class UsageError(Exception):
@@ -299,6 +299,19 @@ def quiet_broken_pipe() -> int:
     except (OSError, ValueError):
         pass
     return EXIT_BROKEN_PIPE
+
+
+def is_interrupt(exc: BaseException) -> bool:
+    """True for a KeyboardInterrupt, or an error raised because of one: a Ctrl-C that lands
+    while numba-compiled code calls back into Python surfaces as a SystemError ("returned a
+    result with an exception set") whose cause is the KeyboardInterrupt."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 def interrupted_message(prog: str) -> str:

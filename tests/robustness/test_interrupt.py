@@ -137,3 +137,30 @@ def test_a_closed_pipe_ends_quietly(argv):
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=60) in (0, 141), err
     assert "Traceback" not in err and "BrokenPipe" not in err, err
+
+
+def test_an_interrupt_inside_numba_code_is_an_interrupt(monkeypatch, capsys):
+    """A Ctrl-C that lands while numba-compiled code calls back into Python surfaces as a
+    SystemError caused by the KeyboardInterrupt (seen once in a clean-clone run of the sweep
+    test above): the command still ends with the one interrupt line and exit 130; any other
+    SystemError propagates."""
+    import correlations.cli as cli
+    from lubrication.cli_contract import EXIT_INTERRUPTED
+
+    def numba_like(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("returned a result with an exception set") from exc
+
+    monkeypatch.setattr(cli, "_run", numba_like)
+    assert cli.main(["estimate"]) == EXIT_INTERRUPTED
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "interrupted" in err[0]
+
+    def other(args):
+        raise SystemError("something else")
+
+    monkeypatch.setattr(cli, "_run", other)
+    with pytest.raises(SystemError, match="something else"):
+        cli.main(["estimate"])
