@@ -33,7 +33,9 @@ Wall-time budget: both take an optional ``deadline`` (:class:`lubrication.checks
 tested before every evaluation of F after the first; once it is spent they return an
 unsuccessful report whose message is the deadline's, carrying the evaluated point of smallest
 |F| (never an exception). One evaluation is one BEM solve (well under a second at the
-resolutions the solvers allow), so the budget is kept to within about one evaluation.
+resolutions the solvers allow), so the budget is kept to within about one evaluation, or one
+set of independent points handed to ``fun.many`` (a difference Jacobian: seconds at the
+largest mode counts).
 """
 
 from __future__ import annotations
