@@ -20,17 +20,22 @@ __all__ = ["cosine_sum", "pole_integrals", "pole_terms", "sine_clenshaw"]
 
 
 @numba.njit(cache=True, nogil=True)
+def _recurrence(c, cos_theta):
+    """(b_1, b_2) of b_k = c_k + 2 cos(theta) b_{k+1} - b_{k+2}, from the last coefficient:
+    sum_k c_k sin(k theta) = b_1 sin(theta), sum_k c_k cos(k theta) = b_1 cos(theta) - b_2."""
+    b1 = 0.0
+    b2 = 0.0
+    for k in range(c.size - 1, -1, -1):
+        b1, b2 = c[k] + 2.0 * cos_theta * b1 - b2, b1
+    return b1, b2
+
+
+@numba.njit(cache=True, nogil=True)
 def sine_clenshaw(c, theta):
     """b_1 of the Clenshaw recurrence, so that sum_k c_k sin(k theta) = b_1 sin(theta)."""
     out = np.empty(theta.size)
-    n = c.size
     for i in range(theta.size):
-        two_cos = 2.0 * math.cos(theta[i])
-        b1 = 0.0
-        b2 = 0.0
-        for k in range(n - 1, -1, -1):
-            b1, b2 = c[k] + two_cos * b1 - b2, b1
-        out[i] = b1
+        out[i] = _recurrence(c, math.cos(theta[i]))[0]
     return out
 
 
@@ -38,13 +43,9 @@ def sine_clenshaw(c, theta):
 def cosine_sum(d, theta):
     """sum_{k=1}^N d_k cos(k theta) (0 for empty d)."""
     out = np.empty(theta.size)
-    n = d.size
     for i in range(theta.size):
         cs = math.cos(theta[i])
-        b1 = 0.0
-        b2 = 0.0
-        for k in range(n - 1, -1, -1):
-            b1, b2 = d[k] + 2.0 * cs * b1 - b2, b1
+        b1, b2 = _recurrence(d, cs)
         out[i] = b1 * cs - b2
     return out
 
@@ -56,17 +57,10 @@ def pole_terms(c, a, u):
     :math:`g = 1 + \sum_j a_j\cos(j\pi u)`: the integrands of the curve's position."""
     th = math.pi * u
     cs = math.cos(th)
-    b1 = 0.0
-    b2 = 0.0
-    for k in range(c.size - 1, -1, -1):
-        b1, b2 = c[k] + 2.0 * cs * b1 - b2, b1
-    phi = th - b1 * math.sin(th)
+    phi = th - _recurrence(c, cs)[0] * math.sin(th)
     g = 1.0
     if a.size:
-        d1 = 0.0
-        d2 = 0.0
-        for k in range(a.size - 1, -1, -1):
-            d1, d2 = a[k] + 2.0 * cs * d1 - d2, d1
+        d1, d2 = _recurrence(a, cs)
         g += d1 * cs - d2
     return g * math.cos(phi), g * math.sin(phi)
 

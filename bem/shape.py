@@ -204,11 +204,11 @@ class SpectralCurve:
         order = np.argsort(flat)
         t, w = _gauss01(16)
         c, a = self._pole_coefficients(front)
-        c, sn = series.pole_integrals(np.ascontiguousarray(c), np.ascontiguousarray(a),
-                                      np.ascontiguousarray(flat[order]), t, w,
-                                      3.0 * self._quad / 16.0)
+        ic, is_ = series.pole_integrals(np.ascontiguousarray(c), np.ascontiguousarray(a),
+                                        np.ascontiguousarray(flat[order]), t, w,
+                                        3.0 * self._quad / 16.0)
         out_c, out_s = np.empty_like(flat), np.empty_like(flat)
-        out_c[order], out_s[order] = c, sn
+        out_c[order], out_s[order] = ic, is_
         return out_c.reshape(u.shape), out_s.reshape(u.shape)
 
     # ------------------------------------------------------------------ pointwise geometry

@@ -497,16 +497,13 @@ def main(argv=None) -> int:
         args = build_parser().parse_args(argv)
         prog = _prog(args)
         return _run(args)
-    except KeyboardInterrupt:
-        print(interrupted_message(prog), file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except BrokenPipeError:
-        return quiet_broken_pipe()
-    except SystemError as exc:             # a Ctrl-C inside numba code (is_interrupt)
+    except (KeyboardInterrupt, SystemError) as exc:     # SystemError: see is_interrupt
         if not is_interrupt(exc):
             raise
         print(interrupted_message(prog), file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        return quiet_broken_pipe()
 
 
 if __name__ == "__main__":
