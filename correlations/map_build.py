@@ -31,7 +31,9 @@ Lines are independent tasks: by default a local :class:`concurrent.futures.Proce
 (``workers`` processes; ``workers=1`` solves in this process), or a Dask distributed cluster
 (``scheduler`` = its address). With Dask the workers write the point files into the build
 folder (a file system they share with the client, as on a cluster); the client also writes any
-point a finished line returns that is not yet on disk.
+point a finished line returns that is not yet on disk. Each line's BEM solves run on the cores
+of its host divided among the lines running there (numba threads: cores // workers for the
+local pool; cores // task threads of the host's Dask workers, :func:`_share_cores`).
 
 Resource envelope: a point takes 0.1–3 s (lubrication) to minutes (BEM near λc); ``max_time``
 bounds each point (an expired point is stored as failed with the reason). The default grid has
@@ -277,15 +279,29 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+def _share_cores(threads: int | None) -> None:
+    """Run this thread's BEM work on ``threads`` numba threads (the assembly and the concurrent
+    Jacobian points of :func:`bem.vesicle._residuals`; numba's setting is per thread), so that
+    the parallel workers of a build do not ask for more threads than the cores. Measured with
+    ``bench_map_build.py`` (2 cores, 8 BEM points, one run each): 2 pool workers of 2 threads
+    13.3 s, of 1 thread 12.3 s; a Dask LocalCluster of 2 processes 15.1 s and 13.6 s."""
+    if threads:
+        import numba
+
+        numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
+
+
 def solve_line(folder, method, ca_b, points, stored, options, max_time, provenance,
-               parent_pid=None, on_point=None) -> list[dict]:
+               parent_pid=None, on_point=None, threads=None) -> list[dict]:
     """Solve the missing points of one line (method, Ca_B, [(ν, λ/λc), ...]) in its order.
 
     ``stored`` maps (ν, λ/λc), rounded to 9 digits, to the records already stored (skipped; a
     converged BEM one is the warm start of the next). Each new point is written to ``folder``
     at once. Stops early if the process's parent is no longer ``parent_pid`` (the build was
-    killed). Returns the new records.
+    killed). ``threads``: numba threads of this line's solves (default: numba's setting).
+    Returns the new records.
     """
+    _share_cores(threads)
     folder = Path(folder)
     warm, new = None, []
     for nu, r in points:
@@ -323,6 +339,18 @@ def _connect(scheduler: str):
     except (OSError, TimeoutError, ValueError) as exc:
         raise InvalidParameterError("scheduler", scheduler, "the address of a reachable Dask "
                                     "scheduler", f"cannot connect ({exc})") from None
+
+
+def _dask_threads(client) -> int:
+    """numba threads per Dask task: on each host its cores over the task threads of the
+    workers there (the smallest over the hosts)."""
+    workers = client.scheduler_info(n_workers=-1)["workers"]
+    cores = client.run(os.cpu_count)
+    slots: dict = {}
+    for address, info in workers.items():
+        slots[info["host"]] = slots.get(info["host"], 0) + int(info.get("nthreads", 1))
+    per_host = {workers[a]["host"]: c or 1 for a, c in cores.items() if a in workers}
+    return max(1, min((per_host.get(h, 1) // n for h, n in slots.items()), default=1))
 
 
 def _stop(executor) -> None:
@@ -502,20 +530,22 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
     executor = None
     if client is None:
         from concurrent.futures import ProcessPoolExecutor
-        n = min(workers or os.cpu_count() or 1, max(len(jobs), 1))
+        cores = os.cpu_count() or 1
+        n = min(workers or cores, max(len(jobs), 1))
         executor = ProcessPoolExecutor(n, mp_context=_pool_context(),
                                        initializer=_ignore_sigint)
+        threads = max(1, cores // n)
         submit = executor.submit
         parent = os.getpid()
     else:
         def submit(*a, **k):
             return client.submit(*a, pure=False, **k)
-        parent = None
+        parent, threads = None, _dask_threads(client)
     seen = _point_names(folder)
     pending: dict = {}
     try:
         pending = {submit(solve_line, str(folder), m, ca, points, have, *args,
-                          parent_pid=parent): (m, ca, points[0]) for m, ca, points, have in jobs}
+                          parent_pid=parent, threads=threads): (m, ca, points[0]) for m, ca, points, have in jobs}
         while pending:
             time.sleep(0.5)
             finished = [f for f in pending if f.done()]

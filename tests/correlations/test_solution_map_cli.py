@@ -265,3 +265,35 @@ def test_build_help_states_the_default_ca_b_grid(capsys):
     text = " ".join(capsys.readouterr().out.split())
     typed = re.search(r"capillary numbers [^(]*\(default ([\d. ]+)\)", text).group(1).split()
     assert [float(v) for v in typed] == map_build.DEFAULT_GRID["ca_b"]
+
+
+def test_dask_tasks_get_the_cores_of_their_host_over_its_task_threads():
+    """Two hosts: 8 cores for 2 workers of 2 threads (2 each), 4 cores for one worker of 1
+    thread (4); the build takes the smaller, so no host is oversubscribed."""
+    class Client:
+        def scheduler_info(self, n_workers=-1):
+            return {"workers": {"a": {"host": "h1", "nthreads": 2},
+                                "b": {"host": "h1", "nthreads": 2},
+                                "c": {"host": "h2", "nthreads": 1}}}
+
+        def run(self, fn):
+            return {"a": 8, "b": 8, "c": 4}
+
+    assert map_build._dask_threads(Client()) == 2
+
+
+def test_a_line_runs_on_the_threads_it_is_given():
+    """numba's thread count is per thread: a line sets it for the thread that solves it."""
+    import threading
+
+    import numba
+    seen = []
+
+    def line():
+        map_build._share_cores(1)
+        seen.append(numba.get_num_threads())
+
+    t = threading.Thread(target=line)
+    t.start()
+    t.join()
+    assert seen == [1]
