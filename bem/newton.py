@@ -29,6 +29,13 @@ returning their F, None where the shape is rejected) they are handed to it toget
 be evaluated concurrently (:func:`bem.vesicle._residuals`). The result must not depend on
 the order of evaluation.
 
+Separable problems: if ``fun`` has an attribute ``fixed`` (a function of the payload at z
+returning (evaluate, project)), the difference quotients of a Jacobian or a directional update
+are taken on ``evaluate``, the residual with the payload's linear unknowns held fixed, and
+projected off the range of their columns by ``project`` (variable projection with Kaufman's
+Jacobian, Kaufman 1975; Golub & Pereyra 2003): J^T F equals that of the full Jacobian at every
+z, and the columns differ by a term of order |F|. One more evaluation, at z itself.
+
 Wall-time budget: both take an optional ``deadline`` (:class:`lubrication.checks.Deadline`),
 tested before every evaluation of F after the first; once it is spent they return an
 unsuccessful report whose message is the deadline's, carrying the evaluated point of smallest
@@ -77,6 +84,16 @@ def _budgeted(fun, deadline, best: list):
                 raise _Expired
             return fun.many(points)
         wrapped.many = many
+    if hasattr(fun, "fixed"):
+        def fixed(payload):
+            evaluate, project = fun.fixed(payload)
+
+            def checked(points):
+                if best and deadline.expired():
+                    raise _Expired
+                return evaluate(points)
+            return checked, project
+        wrapped.fixed = fixed
     return wrapped
 
 
@@ -132,13 +149,31 @@ def _evaluate_points(fun, points) -> list:
     return out
 
 
-def difference_jacobian(fun, z, F, fd_step, exact):
+def _linearised(fun, z, F, payload):
+    """(evaluate, F0, project) for difference quotients at ``z``: ``fun.fixed(payload)`` if
+    ``fun`` has it and the payload is known, else ``fun`` itself (:func:`_evaluate_points`, F0
+    = F, no projection). ``fun.fixed(payload)`` returns (evaluate, project): ``evaluate``
+    maps points to the residual with the linear unknowns of ``payload`` held fixed, ``project``
+    the projection of the differences off the range of those unknowns' columns (variable
+    projection, Kaufman 1975: the same gradient J^T F as the full derivative at every z)."""
+    fixed = getattr(fun, "fixed", None) if payload is not None else None
+    if fixed is None:
+        return (lambda points: _evaluate_points(fun, points)), F, None
+    evaluate, project = fixed(payload)
+    F0 = evaluate([z])[0]
+    if F0 is None:
+        raise InvalidParameterError("z", "a shape rejected by the linearised operator",
+                                    "the shape of the last accepted step")
+    return evaluate, F0, project
+
+
+def difference_jacobian(fun, z, F, fd_step, exact, payload=None):
     """Forward-difference Jacobian; columns in ``exact`` (index -> column) are not differenced;
     a step that makes the shape invalid is taken backwards. The forward points are evaluated
-    together (:func:`_evaluate_points`)."""
+    together (:func:`_evaluate_points`); with ``fun.fixed`` and the ``payload`` at ``z``, by
+    the linearised evaluation of :func:`_linearised` (plus one evaluation at ``z``)."""
+    evaluate, F0, project = _linearised(fun, z, F, payload)
     J = np.empty((F.size, z.size))
-    for j, col in exact.items():
-        J[:, j] = col
     todo = [j for j in range(z.size) if j not in exact]
     steps = [fd_step * max(1.0, abs(z[j])) for j in todo]
     points = []
@@ -146,14 +181,21 @@ def difference_jacobian(fun, z, F, fd_step, exact):
         z2 = z.copy()
         z2[j] += h
         points.append(z2)
-    n_eval = len(points)
-    for j, h, z2, F2 in zip(todo, steps, points, _evaluate_points(fun, points)):
+    n_eval = len(points) + (project is not None)
+    for j, h, z2, F2 in zip(todo, steps, points, evaluate(points)):
         if F2 is None:
             z2[j] -= 2.0 * h
-            F2, _ = fun(z2)
+            F2 = evaluate([z2])[0]
+            if F2 is None:
+                raise InvalidParameterError("z", "a shape whose neighbours are both rejected",
+                                            "a shape inside the operator's range")
             h = -h
             n_eval += 1
-        J[:, j] = (F2 - F) / h
+        J[:, j] = (F2 - F0) / h
+    if project is not None and todo:
+        J[:, todo] = project(J[:, todo])
+    for j, col in exact.items():
+        J[:, j] = col
     return J, n_eval
 
 
@@ -210,7 +252,7 @@ def _levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd_step, 
     norm = float(np.linalg.norm(F))
     history = [norm]
     if jacobian is None:
-        J, n = difference_jacobian(fun, z, F, fd_step, exact(payload))
+        J, n = difference_jacobian(fun, z, F, fd_step, exact(payload), payload)
         n_eval += n
         n_jac, fresh = 1, True
     else:
@@ -229,7 +271,7 @@ def _levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd_step, 
                            f"(supplied Jacobian; the next step rejected)")
                 break
             if not fresh and n_jac < max_jacobians:
-                J, n = difference_jacobian(fun, z, F, fd_step, exact(payload))
+                J, n = difference_jacobian(fun, z, F, fd_step, exact(payload), payload)
                 n_eval += n
                 n_jac, fresh = n_jac + 1, True
                 continue
@@ -290,7 +332,7 @@ def _levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd_step, 
                        + (" (supplied Jacobian)" if supplied_floor and not was_fresh else ""))
             break
         if ratio > 0.5 and n_jac < max_jacobians and not contracting:
-            J, n = difference_jacobian(fun, z, F, fd_step, exact(payload))
+            J, n = difference_jacobian(fun, z, F, fd_step, exact(payload), payload)
             n_eval += n
             n_jac, fresh = n_jac + 1, True
     else:
@@ -298,20 +340,27 @@ def _levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd_step, 
     return LMReport(success, message, z, F, payload, it, n_eval, n_jac, history, J)
 
 
-def _directional_update(fun, z, F, J, Q, fd_step):
+def _directional_update(fun, z, F, J, Q, fd_step, payload=None):
     """J corrected along the orthonormal columns of Q by forward differences (one evaluation
-    per column): J <- J + (J_fd Q - J Q) Q^T; a step that makes the shape invalid is taken
-    backwards. Returns (J, evaluations)."""
+    per column, linearised as in :func:`difference_jacobian`): J <- J + (J_fd Q - J Q) Q^T; a
+    step that makes the shape invalid is taken backwards. Returns (J, evaluations)."""
+    evaluate, F0, project = _linearised(fun, z, F, payload)
     h = fd_step * max(1.0, float(np.max(np.abs(z))))
     JQ = np.empty((F.size, Q.shape[1]))
-    n_eval = Q.shape[1]
+    n_eval = Q.shape[1] + (project is not None)
     points = [z + h * Q[:, i] for i in range(Q.shape[1])]
-    for i, Fi in enumerate(_evaluate_points(fun, points)):
+    for i, Fi in enumerate(evaluate(points)):
         if Fi is None:
             n_eval += 1
-            JQ[:, i] = (F - fun(z - h * Q[:, i])[0]) / h
+            Fb = evaluate([z - h * Q[:, i]])[0]
+            if Fb is None:
+                raise InvalidParameterError("z", "a shape whose neighbours are both rejected",
+                                            "a shape inside the operator's range")
+            JQ[:, i] = (F0 - Fb) / h
         else:
-            JQ[:, i] = (Fi - F) / h
+            JQ[:, i] = (Fi - F0) / h
+    if project is not None:
+        JQ = project(JQ)
     return J + (JQ - J @ Q) @ Q.T, n_eval
 
 
@@ -392,7 +441,7 @@ def _valley_levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd
 
     def fresh_jacobian():
         nonlocal n_eval, n_jac
-        J, n = difference_jacobian(fun, z, F, fd_step, {})
+        J, n = difference_jacobian(fun, z, F, fd_step, {}, payload)
         n_eval, n_jac = n_eval + n, n_jac + 1
         return J
 
@@ -472,7 +521,7 @@ def _valley_levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd
             continue
         _, _, Vt = np.linalg.svd(J, full_matrices=False)
         Q, _ = np.linalg.qr(np.column_stack([step_vec, Vt[-directions:].T]))
-        J, n = _directional_update(fun, z, F, J, Q, fd_step)
+        J, n = _directional_update(fun, z, F, J, Q, fd_step, payload)
         n_eval += n
     else:
         message = f"no convergence in {max_iter} iterations (residual norm {norm:.2e})"

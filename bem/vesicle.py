@@ -29,7 +29,9 @@ Method:
   so the nonlinear unknowns are the N - 2 free shape modes.
 * the weighted residual :math:`\sqrt{w_i}(u_i - V e_x)` (both components) is minimised by
   Levenberg–Marquardt with a forward-difference Jacobian (its points evaluated concurrently,
-  :func:`_residuals`) and Broyden updates
+  :func:`_residuals`, each at the tension and V of the point it differentiates, the differences
+  projected off their columns: the variable-projection Jacobian of Kaufman 1975, whose J^T F is
+  the full derivative's, :meth:`VesicleOperator.fixed_residual`) and Broyden updates
   (:func:`bem.newton.levenberg_marquardt`, shared with the drop; a level on the density of the
   level below starts from that level's Jacobian interpolated to its nodes and differences only
   its new modes, :func:`_prolonged_columns`: at (0.9, 1.0) 57 BEM evaluations instead of 113,
@@ -132,6 +134,18 @@ Solver paths, before → after (each remaining one with its reason):
   at 88 modes), and following at most ``WALL_BODY_PANELS`` = 16 membrane panels (48 modes;
   outputs within 1e-8 of a wall refined twice, measurements at the constant; the default
   solve at (0.6, 1.94): 165 s → 114 s, the same 1749 BIE solves, outputs within 4e-8).
+* Jacobian points: each re-solving the tension and V (M + 1 load columns per BEM solve) →
+  at the tension and V of the point differentiated (one load column; Kaufman's
+  variable-projection Jacobian, same gradient J^T F; columns within 6e-6 of the full ones
+  at a 24-mode minimum of (0.9, 1.0)). Per Jacobian point on 2 threads, (0.61, 1.39) shape:
+  18 → 16 ms at 32 modes, 29 → 25 ms at 56, 48 → 39 ms at 88 (the assembly, not the
+  products, is then most of a point). Default solves: (0.6, 1.94) 121 s → 82 s (converged
+  at 88 modes both, estimates 4.9e-5, 0.046, 3.3 against 5.1e-5, 0.061, 3.7), (0.7, 1.5)
+  9.4 → 8.2 s, (0.8, 1.0) 3.5 → 3.0 s, (0.61, 1.39) 14.1 → 13.1 s, measured one after the
+  other on the same machine. Also measured: fewer tension modes than shape modes (M = N/2)
+  are cheaper per evaluation but converge later: (0.7, 1.5) at 64 modes in 17 s instead
+  of 48 in 9 s, (0.61, 1.39) not converged at 80 modes; M = 3N/2 gains nothing (the same
+  levels, 14.2 s for (0.61, 1.39)); M = N stays.
 * evaluations: one after the other → the points of a difference Jacobian and of a
   directional update evaluated concurrently, one per numba thread (:func:`_residuals`; the
   assembly serial on each thread, the products concurrent, the LAPACK calls under a lock);
@@ -248,6 +262,9 @@ CA_B_MIN, CA_B_MAX = 1e-2, 1e5
 #: sequentially, identical results); the products between them run concurrently
 _LAPACK = threading.Lock()
 
+#: relative singular-value cutoff of the tension/V least squares (gelsy's rcond)
+LSTSQ_COND = 1e-13
+
 
 class VesicleOperator(DropOperator):
     """Velocity of a membrane of given shape in the tube, tension and V by least squares.
@@ -338,9 +355,9 @@ class VesicleOperator(DropOperator):
         q = qw[:, 0] + qw[:, 1:] @ np.asarray(g, dtype=float)
         return self.wall.x.ravel(), 4.0 - q[0::2]
 
-    def _columns(self, curve: SpectralCurve):
-        """velocity_columns plus the wall density columns (2 n_wall, M + 1)."""
-        tol = self.disc.quad_tol
+    def _loads(self, curve: SpectralCurve):
+        """Membrane panels and the load columns Q (interleaved x, r; bending force, then the
+        tension modes) with their Δp⁺ columns."""
         drop = self.panels(curve)
         if np.max(drop.r) >= 1.0 - 1e-6:
             raise InvalidParameterError("shape", "a membrane touching the wall (closing film)",
@@ -354,6 +371,13 @@ class VesicleOperator(DropOperator):
         Q[0::2, 1:], Q[1::2, 1:] = T[:, 0].T, T[:, 1].T
         rb, wb = drop.r.ravel(), drop.w.ravel()
         dp = -4.0 * (rb * (1.0 - rb * rb) * wb) @ Q[0::2]                # per column
+        return drop, Q, dp
+
+    def _flow(self, drop, Q, dp):
+        """Membrane velocity (interleaved, without the Poiseuille flow) of the load columns Q
+        with Δp⁺ columns dp, and the wall densities."""
+        tol = self.disc.quad_tol
+        rb = drop.r.ravel()
         # membrane on itself; membrane on the wall and wall on the membrane in one pass (the
         # ring Stokeslet is reciprocal: one kernel call per far node pair)
         S_dd = influence(drop.x.ravel(), rb, drop, tol=tol)
@@ -363,9 +387,14 @@ class VesicleOperator(DropOperator):
         rhs = (S_wd @ Q) / _EIGHT_PI + np.outer(self.col_dp_wall, dp)
         with _LAPACK:
             qw = -sla.lu_solve(self.lu_wall, rhs, check_finite=False)
-        Uc = (S_dd @ Q) / _EIGHT_PI + (B @ qw) / _EIGHT_PI + np.outer(col_dp, dp)
+        return (S_dd @ Q) / _EIGHT_PI + (B @ qw) / _EIGHT_PI + np.outer(col_dp, dp), qw
+
+    def _columns(self, curve: SpectralCurve):
+        """velocity_columns plus the wall density columns (2 n_wall, M + 1)."""
+        drop, Q, dp = self._loads(curve)
+        Uc, qw = self._flow(drop, Q, dp)
         u0 = Uc[:, 0].copy()
-        u0[0::2] += poiseuille(rb)
+        u0[0::2] += poiseuille(drop.r.ravel())
         return drop, u0, Uc[:, 1:], float(dp[0]), dp[1:], qw
 
     def evaluate(self, curve: SpectralCurve) -> dict:
@@ -378,14 +407,38 @@ class VesicleOperator(DropOperator):
         ex[0::2] = 1.0
         M = np.column_stack([Ug, -ex]) * sw[:, None]
         with _LAPACK:
-            sol, *_ = sla.lstsq(M, -u0 * sw, cond=1e-13, lapack_driver="gelsy")
+            sol, *_ = sla.lstsq(M, -u0 * sw, cond=LSTSQ_COND, lapack_driver="gelsy")
             self.evaluations += 1
         F = u0 * sw + M @ sol
         g, V = sol[:-1], float(sol[-1])
         res = F / sw
-        return {"curve": curve, "panels": drop, "F": F, "g": g, "V": V,
+        return {"curve": curve, "panels": drop, "F": F, "g": g, "V": V, "M": M,
                 "dp": float(dp0 + dpg @ g), "residual": float(np.max(np.abs(res))),
                 "res_x": res[0::2], "res_r": res[1::2]}
+
+    def fixed_residual(self, curve: SpectralCurve, g, V: float) -> np.ndarray:
+        r"""Weighted residual :math:`\sqrt{w_i}(u_i - V e_x)` of ``curve`` with the tension
+        coefficients ``g`` and speed ``V`` held fixed: one BEM solve of the single load
+        :math:`Q[1; g]` instead of the M + 1 columns of :meth:`evaluate` (about 4x cheaper
+        at 96 modes). Its differences, projected off the range of the tension and V columns,
+        are the variable-projection Jacobian of Kaufman (1975) (:func:`bem.newton.
+        difference_jacobian`)."""
+        drop, Q, dp = self._loads(curve)
+        coef = np.concatenate(([1.0], np.asarray(g, dtype=float)))
+        u, _ = self._flow(drop, (Q @ coef)[:, None], np.array([dp @ coef]))
+        u = u[:, 0]
+        u[0::2] += poiseuille(drop.r.ravel()) - V
+        with _LAPACK:
+            self.evaluations += 1
+        return u * np.repeat(np.sqrt(drop.w.ravel()), 2)
+
+
+def _range_projector(M: np.ndarray):
+    """X -> X minus its projection on the range of M (rank as in the least squares of
+    :meth:`VesicleOperator.evaluate`, singular values above LSTSQ_COND of the largest)."""
+    U, sv, _ = np.linalg.svd(M, full_matrices=False)
+    U = U[:, sv > LSTSQ_COND * sv[0]]
+    return lambda X: X - U @ (U.T @ X)
 
 
 #: wall panels of the vesicle meshes, relative to the drop's rule (DropDiscretisation.wall_
@@ -604,18 +657,23 @@ def _workers() -> int:
     return max(1, int(numba.get_num_threads()))
 
 
-def _residuals(op: VesicleOperator, modes_list) -> list:
+def _residuals(op: VesicleOperator, modes_list, fixed=None) -> list:
     """Weighted residuals F of the shapes ``modes_list`` (None where the operator rejects one),
     evaluated ``_workers()`` at a time, each on one thread (serial assembly; the products and
-    kernels release the GIL). Every shape starts its area secant from the same slope, so the
-    result does not depend on the number of threads or on the order. Measured at (0.6, 1.94),
-    96 modes, on 2 cores: 0.08 s per evaluation against 0.12 s one after the other."""
+    kernels release the GIL); with ``fixed`` = (g, V), the residuals at those fixed tension
+    coefficients and speed (:meth:`VesicleOperator.fixed_residual`). Every shape starts its
+    area secant from the same slope, so the result does not depend on the number of threads
+    or on the order. Measured at (0.6, 1.94), 96 modes, on 2 cores: 0.08 s per evaluation
+    against 0.12 s one after the other."""
     slope = op._area_slope
 
     def one(modes, serial=True):
         with serial_assembly() if serial else nullcontext(), single_threaded_blas():
             try:
-                return op.evaluate(op.curve(modes, slope=slope))["F"]
+                curve = op.curve(modes, slope=slope)
+                if fixed is not None:
+                    return op.fixed_residual(curve, *fixed)
+                return op.evaluate(curve)["F"]
             except InvalidParameterError:
                 return None
 
@@ -650,6 +708,13 @@ def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, m
 
     fun.many = lambda points: _residuals(op, [op.full(z, template) for z in points])
 
+    def fixed(payload):                    # Jacobian columns at fixed tension and V (Kaufman)
+        at = (payload["g"], payload["V"])
+        return ((lambda points: _residuals(op, [op.full(z, template) for z in points], at)),
+                _range_projector(payload["M"]))
+
+    fun.fixed = fixed
+
     z0, start, J0, extra = op.free(template), None, None, 0
     if coarse is not None and not (deadline is not None and deadline.expired()):
         try:
@@ -658,7 +723,7 @@ def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, m
             start = None
         known = _prolonged_columns(*coarse, op, start[1]) if start else {}
         if known:
-            J0, n = difference_jacobian(fun, z0, start[0], 1e-7, known)
+            J0, n = difference_jacobian(fun, z0, start[0], 1e-7, known, start[1])
             extra += n
     if valley:
         rep = valley_levenberg_marquardt(fun, z0, tol=xtol, max_iter=8 * max_iter,
