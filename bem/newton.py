@@ -34,7 +34,7 @@ returning (evaluate, project)), the difference quotients of a Jacobian or a dire
 are taken on ``evaluate``, the residual with the payload's linear unknowns held fixed, and
 projected off the range of their columns by ``project`` (variable projection with Kaufman's
 Jacobian, Kaufman 1975; Golub & Pereyra 2003): J^T F equals that of the full Jacobian at every
-z, and the columns differ by a term of order |F|. One more evaluation, at z itself.
+z, and the columns differ by a term of order |F|.
 
 Wall-time budget: both take an optional ``deadline`` (:class:`lubrication.checks.Deadline`),
 tested before every evaluation of F after the first; once it is spent they return an
@@ -149,30 +149,27 @@ def _evaluate_points(fun, points) -> list:
     return out
 
 
-def _linearised(fun, z, F, payload):
-    """(evaluate, F0, project) for difference quotients at ``z``: ``fun.fixed(payload)`` if
-    ``fun`` has it and the payload is known, else ``fun`` itself (:func:`_evaluate_points`, F0
-    = F, no projection). ``fun.fixed(payload)`` returns (evaluate, project): ``evaluate``
-    maps points to the residual with the linear unknowns of ``payload`` held fixed, ``project``
-    the projection of the differences off the range of those unknowns' columns (variable
-    projection, Kaufman 1975: the same gradient J^T F as the full derivative at every z)."""
+def _linearised(fun, F, payload, points):
+    """(F at each of ``points``, evaluate, project) for difference quotients from F: by ``fun``
+    itself (no projection), or by ``fun.fixed(payload)`` if ``fun`` has it and the payload is
+    known: (evaluate, project), ``evaluate`` mapping points to the residual with the linear
+    unknowns of ``payload`` held fixed (equal to F at the payload's point, to rounding),
+    ``project`` the projection of the differences off the range of those unknowns' columns
+    (variable projection, Kaufman 1975: the same gradient J^T F as the full derivative)."""
     fixed = getattr(fun, "fixed", None) if payload is not None else None
     if fixed is None:
-        return (lambda points: _evaluate_points(fun, points)), F, None
+        def evaluate(pts):
+            return _evaluate_points(fun, pts)
+        return evaluate(points), evaluate, None
     evaluate, project = fixed(payload)
-    F0 = evaluate([z])[0]
-    if F0 is None:
-        raise InvalidParameterError("z", "a shape rejected by the linearised operator",
-                                    "the shape of the last accepted step")
-    return evaluate, F0, project
+    return evaluate(points), evaluate, project
 
 
 def difference_jacobian(fun, z, F, fd_step, exact, payload=None):
     """Forward-difference Jacobian; columns in ``exact`` (index -> column) are not differenced;
     a step that makes the shape invalid is taken backwards. The forward points are evaluated
     together (:func:`_evaluate_points`); with ``fun.fixed`` and the ``payload`` at ``z``, by
-    the linearised evaluation of :func:`_linearised` (plus one evaluation at ``z``)."""
-    evaluate, F0, project = _linearised(fun, z, F, payload)
+    the linearised evaluation of :func:`_linearised`."""
     J = np.empty((F.size, z.size))
     todo = [j for j in range(z.size) if j not in exact]
     steps = [fd_step * max(1.0, abs(z[j])) for j in todo]
@@ -181,8 +178,9 @@ def difference_jacobian(fun, z, F, fd_step, exact, payload=None):
         z2 = z.copy()
         z2[j] += h
         points.append(z2)
-    n_eval = len(points) + (project is not None)
-    for j, h, z2, F2 in zip(todo, steps, points, evaluate(points)):
+    values, evaluate, project = _linearised(fun, F, payload, points)
+    n_eval = len(points)
+    for j, h, z2, F2 in zip(todo, steps, points, values):
         if F2 is None:
             z2[j] -= 2.0 * h
             F2 = evaluate([z2])[0]
@@ -191,7 +189,7 @@ def difference_jacobian(fun, z, F, fd_step, exact, payload=None):
                                             "a shape inside the operator's range")
             h = -h
             n_eval += 1
-        J[:, j] = (F2 - F0) / h
+        J[:, j] = (F2 - F) / h
     if project is not None and todo:
         J[:, todo] = project(J[:, todo])
     for j, col in exact.items():
@@ -344,21 +342,21 @@ def _directional_update(fun, z, F, J, Q, fd_step, payload=None):
     """J corrected along the orthonormal columns of Q by forward differences (one evaluation
     per column, linearised as in :func:`difference_jacobian`): J <- J + (J_fd Q - J Q) Q^T; a
     step that makes the shape invalid is taken backwards. Returns (J, evaluations)."""
-    evaluate, F0, project = _linearised(fun, z, F, payload)
     h = fd_step * max(1.0, float(np.max(np.abs(z))))
     JQ = np.empty((F.size, Q.shape[1]))
-    n_eval = Q.shape[1] + (project is not None)
     points = [z + h * Q[:, i] for i in range(Q.shape[1])]
-    for i, Fi in enumerate(evaluate(points)):
+    values, evaluate, project = _linearised(fun, F, payload, points)
+    n_eval = Q.shape[1]
+    for i, Fi in enumerate(values):
         if Fi is None:
             n_eval += 1
             Fb = evaluate([z - h * Q[:, i]])[0]
             if Fb is None:
                 raise InvalidParameterError("z", "a shape whose neighbours are both rejected",
                                             "a shape inside the operator's range")
-            JQ[:, i] = (F0 - Fb) / h
+            JQ[:, i] = (F - Fb) / h
         else:
-            JQ[:, i] = (Fi - F0) / h
+            JQ[:, i] = (Fi - F) / h
     if project is not None:
         JQ = project(JQ)
     return J + (JQ - J @ Q) @ Q.T, n_eval

@@ -242,7 +242,8 @@ from .threads import single_threaded_blas
 
 __all__ = ["CA_B_MAX", "CA_B_MIN", "MAX_MODES", "NEAR_CRITICAL", "WALL_REFINEMENT",
            "check_vesicle_inputs", "VesicleOperator", "capsule_seed",
-           "fit_lubrication", "lubrication_seed", "mode_convergence", "seed_from_lubrication",
+           "fit_lubrication", "level_function", "lubrication_seed", "mode_convergence",
+           "seed_from_lubrication",
            "solve_vesicle", "spheroid_seed", "vesicle_discretisation"]
 
 log = logging.getLogger(__name__)
@@ -687,6 +688,27 @@ def _residuals(op: VesicleOperator, modes_list, fixed=None) -> list:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
+def level_function(op: VesicleOperator, template):
+    """The residual of one level as :mod:`bem.newton` takes it: ``fun(z)`` = (F, state) of
+    the shape with free modes z (the other modes from ``template``), with ``fun.many``
+    (independent points evaluated concurrently, :func:`_residuals`) and ``fun.fixed``
+    (Jacobian points at the tension and V of the state differentiated, projected off their
+    columns: Kaufman's variable-projection Jacobian, :meth:`VesicleOperator.fixed_residual`)."""
+    def fun(z):
+        st = op.evaluate(op.curve(op.full(z, template)))
+        return st["F"], st
+
+    def many(points, at=None):
+        return _residuals(op, [op.full(z, template) for z in points], at)
+
+    def fixed(state):
+        at = (state["g"], state["V"])
+        return (lambda points: many(points, at)), _range_projector(state["M"])
+
+    fun.many, fun.fixed = many, fixed
+    return fun
+
+
 def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, max_iter,
                  seed_level=False, valley=False, carrier=False, deadline=None, coarse=None):
     """Levenberg–Marquardt at one resolution from ``seed``
@@ -701,20 +723,7 @@ def _solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, m
         if seed.n_modes != disc.n_modes else seed
     op = VesicleOperator(nu, lam, ca_b, disc, ref, n_tension)
     template = op.curve(ref.modes).modes.copy()
-
-    def fun(z):
-        st = op.evaluate(op.curve(op.full(z, template)))
-        return st["F"], st
-
-    fun.many = lambda points: _residuals(op, [op.full(z, template) for z in points])
-
-    def fixed(payload):                    # Jacobian columns at fixed tension and V (Kaufman)
-        at = (payload["g"], payload["V"])
-        return ((lambda points: _residuals(op, [op.full(z, template) for z in points], at)),
-                _range_projector(payload["M"]))
-
-    fun.fixed = fixed
-
+    fun = level_function(op, template)
     z0, start, J0, extra = op.free(template), None, None, 0
     if coarse is not None and not (deadline is not None and deadline.expired()):
         try:

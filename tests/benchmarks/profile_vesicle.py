@@ -329,7 +329,7 @@ def profile_scaling(modes, repeats: int, newton: bool, nu=0.9, lam=1.0, ca_b=50.
     import numpy as np
 
     import bem.newton as newton_mod
-    from bem.vesicle import VesicleOperator, _residuals, lubrication_seed, vesicle_discretisation
+    from bem.vesicle import VesicleOperator, level_function, lubrication_seed, vesicle_discretisation
 
     _, lub = lubrication_seed(nu, lam, ca_b, 16)
     from bem.vesicle import seed_from_lubrication
@@ -342,12 +342,7 @@ def profile_scaling(modes, repeats: int, newton: bool, nu=0.9, lam=1.0, ca_b=50.
         template = op.curve(seed.modes).modes.copy()
         z0 = op.free(template)
 
-        def fun(z, op=op, template=template):
-            st = op.evaluate(op.curve(op.full(z, template)))
-            return st["F"], st
-
-        fun.many = (lambda points, op=op, template=template:      # as bem.vesicle._solve_level
-                    _residuals(op, [op.full(z, template) for z in points]))
+        fun = level_function(op, template)                     # as bem.vesicle._solve_level
         prof = Profiler()
         install(prof)
         blas = _solver_blas()
@@ -358,7 +353,7 @@ def profile_scaling(modes, repeats: int, newton: bool, nu=0.9, lam=1.0, ca_b=50.
             for _ in range(repeats):
                 prof.reset()
                 t0 = time.perf_counter()
-                F, _ = fun(z0)
+                F, state = fun(z0)
                 el = time.perf_counter() - t0
                 best = min(best, el)
                 for c, t in prof.excl.items():
@@ -367,7 +362,7 @@ def profile_scaling(modes, repeats: int, newton: bool, nu=0.9, lam=1.0, ca_b=50.
             if newton:
                 ev0 = op.evaluations
                 t0 = time.perf_counter()
-                J, _ = newton_mod.difference_jacobian(fun, z0, F, 1e-7, {})
+                J, _ = newton_mod.difference_jacobian(fun, z0, F, 1e-7, {}, state)
                 newton_mod._damped_step(fun, z0, J, F, float(np.linalg.norm(F)), 1e-8, True)
                 t_newton = time.perf_counter() - t0
                 n_newton = op.evaluations - ev0
