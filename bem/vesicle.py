@@ -126,7 +126,14 @@ Solver paths, before → after (each remaining one with its reason):
   in two halves on two threads (0.120 s against 0.118 s at 96 modes: the wall solve, under
   the lock, is half the products' time); +16 instead of +8 modes between the consistent levels of
   a long vesicle near lam_c (64, 80, 96 at (0.6, 1.94): 82 s and 1362 BIE solves, but the
-  Δp⁺ estimate 1.1e-4 relative, above ``tol``, where the +8 ladder converges at 96 modes).
+  Δp⁺ estimate 1.1e-4 relative, above ``tol``, where the +8 ladder converges at 96 modes). Measured with the
+  Kaufman Jacobian and not adopted: the level whose shape builds the first re-built density
+  of (0.6, 1.94) (48 modes) as a carrier (one difference Jacobian, no convergence test): its
+  shape resolves the neck less, and the ladder converged at 96 instead of 88 modes (1595
+  BIE solves instead of 1476); the lubrication seed solved to 1e-3 instead of
+  ``SEED_LUBRICATION_TOL`` = 1e-4: the same BIE solves at six default cases and 0.4 s less
+  at (0.61, 1.39), but (0.6, 1.94) took another path (1788 BIE solves) and ended not
+  converged at 96 modes (Δp⁺ estimate 1.1e-4 relative).
 * wall mesh: the drop's rule, wall panels beside the body following the membrane's panel
   count → the same, lengthened by ``WALL_BODY_LENGTH``/extent beside a vesicle longer than
   6 R, whose panel count grows with its length (at a fixed 64-mode shape of (0.6, 1.94):
@@ -139,10 +146,12 @@ Solver paths, before → after (each remaining one with its reason):
   variable-projection Jacobian, same gradient J^T F; columns within 6e-6 of the full ones
   at a 24-mode minimum of (0.9, 1.0)). Per Jacobian point on 2 threads, (0.61, 1.39) shape:
   18 → 16 ms at 32 modes, 29 → 25 ms at 56, 48 → 39 ms at 88 (the assembly, not the
-  products, is then most of a point). Default solves: (0.6, 1.94) 121 s → 82 s (converged
-  at 88 modes both, estimates 4.9e-5, 0.046, 3.3 against 5.1e-5, 0.061, 3.7), (0.7, 1.5)
-  9.4 → 8.2 s, (0.8, 1.0) 3.5 → 3.0 s, (0.61, 1.39) 14.1 → 13.1 s, measured one after the
-  other on the same machine. Also measured: fewer tension modes than shape modes (M = N/2)
+  products, is then most of a point). The seven default cases (``default_cases.py``, 2 cores):
+  (0.8, 1.0) 4 → 3 s, (0.7, 1.2) 11 → 9 s, (0.6, 1.5) 22 → 17 s, (0.7, 1.5) 10 → 7 s,
+  (0.9, 0.98 λc) 33 → 24 s, (0.7, 0.95 λc) 31 → 21 s, (0.6, 1.94) 109 → 67 s (1565 → 1476
+  BIE solves, converged at 88 modes both, estimates 5.4e-5, 0.047, 3.5 against 5.1e-5,
+  0.061, 3.7); (0.61, 1.39) about the same (12.4–12.8 s both, 454 → 494 BIE solves, at
+  56 modes the assembly dominates a point either way). Also measured: fewer tension modes than shape modes (M = N/2)
   are cheaper per evaluation but converge later: (0.7, 1.5) at 64 modes in 17 s instead
   of 48 in 9 s, (0.61, 1.39) not converged at 80 modes; M = 3N/2 gains nothing (the same
   levels, 14.2 s for (0.61, 1.39)); M = N stays.
