@@ -133,7 +133,13 @@ Solver paths, before → after (each remaining one with its reason):
   BIE solves instead of 1476); the lubrication seed solved to 1e-3 instead of
   ``SEED_LUBRICATION_TOL`` = 1e-4: the same BIE solves at six default cases and 0.4 s less
   at (0.61, 1.39), but (0.6, 1.94) took another path (1788 BIE solves) and ended not
-  converged at 96 modes (Δp⁺ estimate 1.1e-4 relative).
+  converged at 96 modes (Δp⁺ estimate 1.1e-4 relative). Also not adopted: the products of an
+  evaluation that runs alone (the Levenberg–Marquardt steps) split by rows over the two
+  threads, each with one BLAS thread (13–17 ms instead of 24–29 ms for the products at 96
+  modes; default solves 10 % faster at the same BIE solves: (0.61, 1.39) 11.0 → 10.0 s,
+  (0.9, 1.0) 1.4 → 1.2 s, (0.7, 1.5) 7.0 → 6.1 s, (0.6, 1.5) 17 → 15.7 s): the smaller
+  blocks change the BLAS rounding, and (0.6, 1.94) took another path that converged at 96
+  instead of 88 modes, in 81–85 s instead of 67 s.
 * wall mesh: the drop's rule, wall panels beside the body following the membrane's panel
   count → the same, lengthened by ``WALL_BODY_LENGTH``/extent beside a vesicle longer than
   6 R, whose panel count grows with its length (at a fixed 64-mode shape of (0.6, 1.94):
