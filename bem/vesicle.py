@@ -201,8 +201,8 @@ Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
 
 * shape modes 8 <= n_modes, max_modes, rung_modes <= :data:`MAX_MODES` = 96 (the long
   vesicle at (0.6, 0.98 λc) needs 88–96; a level of N modes has max(8, ceil(N/3)) panels
-  and a difference Jacobian costs N BEM evaluations, ~0.02–0.15 s each, two at a time on 2
-  cores, so 96 modes is ~8 s per Jacobian); peak memory stays below 1 GB (measured 555 MB
+  and a difference Jacobian costs N BEM evaluations, ~0.02–0.08 s each (one load column),
+  two at a time on 2 cores, so 96 modes is ~5 s per Jacobian); peak memory stays below 1 GB (measured 553 MB
   for the default solve at (0.6, 0.98 λc), two evaluations at a time; 839 MB one at a time
   before the wall followed at most WALL_BODY_PANELS, 1.5 GB before the wall beside long
   vesicles was lengthened).

@@ -112,8 +112,8 @@ SOLVERS = ("lubrication", "bem")
 #: ``Method.solver`` of the map rows: used unless the caller disables the map.
 MAP = "map"
 
-#: Typical cost of one estimate with each solver (quoted in the estimate's notes; BEM: 2 s at
-#: (0.9, 1.0) to two minutes near lam_c, tests/benchmarks/bench_vesicle.py).
+#: Typical cost of one estimate with each solver (quoted in the estimate's notes; BEM: 1.4 s at
+#: (0.9, 1.0) to about a minute near lam_c, tests/benchmarks/bench_vesicle.py).
 SOLVER_COST = {"lubrication": "seconds per case", "bem": "seconds to minutes per case"}
 
 
