@@ -112,34 +112,32 @@ Solver paths, before → after (each remaining one with its reason):
   (0.6, 1.94): once, not converged at 88 modes, 1602 BIE solves; twice, converged at 88 or 96
   modes depending on the carriers' path, 1587 or 1745), once elsewhere (a second re-build
   costs the red blood cell (0.61, 0.71 lam_c) a level: 682 BIE solves instead of 454).
-* not adopted: a Jacobian carried across a re-built density by the chain rule (mode map by
-  curve fits, rows by arc-length fraction) is accurate for the lower half of the modes only
-  (at (0.9, 1.0), 16 → 24 modes: column errors 0.3–6 %, above it 12–56 %), which would save
-  ~3 % of the BIE solves at (0.6, 1.94); ending a valley level once a fresh Jacobian's step
-  achieves 90 % of its promised decrease of |F|² (at (0.6, 1.94): 1358 BIE solves instead of
-  1745) leaves the 72- and 80-mode levels 2e-5 (V/U) and 0.1 (Δp⁺) from their certified
-  minima, noise of the size of the differences the error estimate extrapolates. Also not
-  adopted: the wall solve by an explicit inverse (a product instead of the locked
-  ``lu_solve``; two concurrent evaluations at 96 modes of (0.6, 1.94) 0.086 s against
-  0.080 s); two OpenBLAS threads in an evaluation (0.25 s against 0.18 s with one, the
-  threads competing with numba's); the load columns of an evaluation that runs alone split
-  in two halves on two threads (0.120 s against 0.118 s at 96 modes: the wall solve, under
-  the lock, is half the products' time); +16 instead of +8 modes between the consistent levels of
-  a long vesicle near lam_c (64, 80, 96 at (0.6, 1.94): 82 s and 1362 BIE solves, but the
-  Δp⁺ estimate 1.1e-4 relative, above ``tol``, where the +8 ladder converges at 96 modes). Measured with the
-  Kaufman Jacobian and not adopted: the level whose shape builds the first re-built density
-  of (0.6, 1.94) (48 modes) as a carrier (one difference Jacobian, no convergence test): its
-  shape resolves the neck less, and the ladder converged at 96 instead of 88 modes (1595
-  BIE solves instead of 1476); the lubrication seed solved to 1e-3 instead of
-  ``SEED_LUBRICATION_TOL`` = 1e-4: the same BIE solves at six default cases and 0.4 s less
-  at (0.61, 1.39), but (0.6, 1.94) took another path (1788 BIE solves) and ended not
-  converged at 96 modes (Δp⁺ estimate 1.1e-4 relative). Also not adopted: the products of an
-  evaluation that runs alone (the Levenberg–Marquardt steps) split by rows over the two
-  threads, each with one BLAS thread (13–17 ms instead of 24–29 ms for the products at 96
-  modes; default solves 10 % faster at the same BIE solves: (0.61, 1.39) 11.0 → 10.0 s,
-  (0.9, 1.0) 1.4 → 1.2 s, (0.7, 1.5) 7.0 → 6.1 s, (0.6, 1.5) 17 → 15.7 s): the smaller
-  blocks change the BLAS rounding, and (0.6, 1.94) took another path that converged at 96
-  instead of 88 modes, in 81–85 s instead of 67 s.
+* not adopted: a Jacobian carried across a re-built density by the chain rule (mode map by curve
+  fits, rows by arc-length fraction) is accurate for the lower half of the modes only (at (0.9,
+  1.0), 16 → 24 modes: column errors 0.3–6 %, above it 12–56 %), which would save ~3 % of the BIE
+  solves at (0.6, 1.94); ending a valley level once a fresh Jacobian's step achieves 90 % of its
+  promised decrease of |F|² (at (0.6, 1.94): 1358 BIE solves instead of 1745) leaves the 72- and
+  80-mode levels 2e-5 (V/U) and 0.1 (Δp⁺) from their certified minima, noise of the size of the
+  differences the error estimate extrapolates. Also not adopted: the wall solve by an explicit
+  inverse (a product instead of the locked ``lu_solve``; two concurrent evaluations at 96 modes
+  of (0.6, 1.94) 0.086 s against 0.080 s); two OpenBLAS threads in an evaluation (0.25 s against
+  0.18 s with one, the threads competing with numba's); the load columns of an evaluation that
+  runs alone split in two halves on two threads (0.120 s against 0.118 s at 96 modes: the wall
+  solve, under the lock, is half the products' time); +16 instead of +8 modes between the
+  consistent levels of a long vesicle near lam_c (64, 80, 96 at (0.6, 1.94): 82 s and 1362 BIE
+  solves, but the Δp⁺ estimate 1.1e-4 relative, above ``tol``, where the +8 ladder converges at
+  96 modes). Measured with the Kaufman Jacobian and not adopted: the level whose shape builds the
+  first re-built density of (0.6, 1.94) (48 modes) as a carrier (one difference Jacobian, no
+  convergence test): its shape resolves the neck less, and the ladder converged at 96 instead of
+  88 modes (1595 BIE solves instead of 1476); the lubrication seed solved to 1e-3 instead of
+  ``SEED_LUBRICATION_TOL`` = 1e-4: the same BIE solves at six default cases and 0.4 s less at
+  (0.61, 1.39), but (0.6, 1.94) took another path (1788 BIE solves) and ended not converged at 96
+  modes (Δp⁺ estimate 1.1e-4 relative). Also not adopted: the products of an evaluation that runs
+  alone (the Levenberg–Marquardt steps) split by rows over the two threads, each with one BLAS
+  thread (13–17 ms instead of 24–29 ms for the products at 96 modes; default solves 10 % faster
+  at the same BIE solves: (0.61, 1.39) 11.0 → 10.0 s, (0.9, 1.0) 1.4 → 1.2 s, (0.7, 1.5) 7.0 →
+  6.1 s, (0.6, 1.5) 17 → 15.7 s): the smaller blocks change the BLAS rounding, and (0.6, 1.94)
+  took another path that converged at 96 instead of 88 modes, in 81–85 s instead of 67 s.
 * wall mesh: the drop's rule, wall panels beside the body following the membrane's panel
   count → the same, lengthened by ``WALL_BODY_LENGTH``/extent beside a vesicle longer than
   6 R, whose panel count grows with its length (at a fixed 64-mode shape of (0.6, 1.94):
@@ -147,20 +145,19 @@ Solver paths, before → after (each remaining one with its reason):
   at 88 modes), and following at most ``WALL_BODY_PANELS`` = 16 membrane panels (48 modes;
   outputs within 1e-8 of a wall refined twice, measurements at the constant; the default
   solve at (0.6, 1.94): 165 s → 114 s, the same 1749 BIE solves, outputs within 4e-8).
-* Jacobian points: each re-solving the tension and V (M + 1 load columns per BEM solve) →
-  at the tension and V of the point differentiated (one load column; Kaufman's
-  variable-projection Jacobian, same gradient J^T F; columns within 6e-6 of the full ones
-  at a 24-mode minimum of (0.9, 1.0)). Per Jacobian point on 2 threads, (0.61, 1.39) shape:
-  18 → 16 ms at 32 modes, 29 → 25 ms at 56, 48 → 39 ms at 88 (the assembly, not the
-  products, is then most of a point). The seven default cases (``default_cases.py``, 2 cores):
-  (0.8, 1.0) 4 → 3 s, (0.7, 1.2) 11 → 9 s, (0.6, 1.5) 22 → 17 s, (0.7, 1.5) 10 → 7 s,
-  (0.9, 0.98 λc) 33 → 24 s, (0.7, 0.95 λc) 31 → 21 s, (0.6, 1.94) 109 → 67 s (1565 → 1476
-  BIE solves, converged at 88 modes both, estimates 5.4e-5, 0.047, 3.5 against 5.1e-5,
-  0.061, 3.7); (0.61, 1.39) about the same (12.4–12.8 s both, 454 → 494 BIE solves, at
-  56 modes the assembly dominates a point either way). Also measured: fewer tension modes than shape modes (M = N/2)
-  are cheaper per evaluation but converge later: (0.7, 1.5) at 64 modes in 17 s instead
-  of 48 in 9 s, (0.61, 1.39) not converged at 80 modes; M = 3N/2 gains nothing (the same
-  levels, 14.2 s for (0.61, 1.39)); M = N stays.
+* Jacobian points: each re-solving the tension and V (M + 1 load columns per BEM solve) → at the
+  tension and V of the point differentiated (one load column; Kaufman's variable-projection
+  Jacobian, same gradient J^T F; columns within 6e-6 of the full ones at a 24-mode minimum of
+  (0.9, 1.0)). Per Jacobian point on 2 threads, (0.61, 1.39) shape: 18 → 16 ms at 32 modes, 29 →
+  25 ms at 56, 48 → 39 ms at 88 (the assembly, not the products, is then most of a point). The
+  seven default cases (``default_cases.py``, 2 cores): (0.8, 1.0) 4 → 3 s, (0.7, 1.2) 11 → 9 s,
+  (0.6, 1.5) 22 → 17 s, (0.7, 1.5) 10 → 7 s, (0.9, 0.98 λc) 33 → 24 s, (0.7, 0.95 λc) 31 → 21 s,
+  (0.6, 1.94) 109 → 67 s (1565 → 1476 BIE solves, converged at 88 modes both, estimates 5.4e-5,
+  0.047, 3.5 against 5.1e-5, 0.061, 3.7); (0.61, 1.39) about the same (454 → 456 BIE
+  solves, 12.6–12.7 s → 12.4–12.8 s back to back: at 56 modes the assembly dominates a point). Also measured: fewer
+  tension modes than shape modes (M = N/2) are cheaper per evaluation but converge later: (0.7,
+  1.5) at 64 modes in 17 s instead of 48 in 9 s, (0.61, 1.39) not converged at 80 modes; M = 3N/2
+  gains nothing (the same levels, 14.2 s for (0.61, 1.39)); M = N stays.
 * evaluations: one after the other → the points of a difference Jacobian and of a
   directional update evaluated concurrently, one per numba thread (:func:`_residuals`; the
   assembly serial on each thread, the products concurrent, the LAPACK calls under a lock);
@@ -199,13 +196,13 @@ Solver paths, before → after (each remaining one with its reason):
 
 Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
 
-* shape modes 8 <= n_modes, max_modes, rung_modes <= :data:`MAX_MODES` = 96 (the long
-  vesicle at (0.6, 0.98 λc) needs 88–96; a level of N modes has max(8, ceil(N/3)) panels
-  and a difference Jacobian costs N BEM evaluations, ~0.02–0.08 s each (one load column),
-  two at a time on 2 cores, so 96 modes is ~5 s per Jacobian); peak memory stays below 1 GB (measured 553 MB
-  for the default solve at (0.6, 0.98 λc), two evaluations at a time; 839 MB one at a time
-  before the wall followed at most WALL_BODY_PANELS, 1.5 GB before the wall beside long
-  vesicles was lengthened).
+* shape modes 8 <= n_modes, max_modes, rung_modes <= :data:`MAX_MODES` = 96 (the long vesicle at
+  (0.6, 0.98 λc) needs 88–96; a level of N modes has max(8, ceil(N/3)) panels and a difference
+  Jacobian costs N BEM evaluations, ~0.02–0.08 s each (one load column), two at a time on 2
+  cores, so 96 modes is ~5 s per Jacobian); peak memory stays below 1 GB (measured 553 MB for the
+  default solve at (0.6, 0.98 λc), two evaluations at a time; 839 MB one at a time before the
+  wall followed at most WALL_BODY_PANELS, 1.5 GB before the wall beside long vesicles was
+  lengthened).
 * :data:`CA_B_MIN` = 0.01 <= Ca_B <= :data:`CA_B_MAX` = 1e5, the range of the lubrication
   solver that provides the initial shape (:mod:`lubrication.solve`; at 1e5 bending is within
   1e-6 of the high-Ca model). Ca_B = ηUR0²/κ is ~1–1000 for red blood cells (Chen et al.
@@ -435,8 +432,9 @@ class VesicleOperator(DropOperator):
     def fixed_residual(self, curve: SpectralCurve, g, V: float) -> np.ndarray:
         r"""Weighted residual :math:`\sqrt{w_i}(u_i - V e_x)` of ``curve`` with the tension
         coefficients ``g`` and speed ``V`` held fixed: one BEM solve of the single load
-        :math:`Q[1; g]` instead of the M + 1 columns of :meth:`evaluate` (about 4x cheaper
-        at 96 modes). Its differences, projected off the range of the tension and V columns,
+        :math:`Q[1; g]` instead of the M + 1 columns of :meth:`evaluate` (the assembly, the
+        same for both, is then most of the cost: 39 against 48 ms per point at 88 modes on 2
+        threads). Its differences, projected off the range of the tension and V columns,
         are the variable-projection Jacobian of Kaufman (1975) (:func:`bem.newton.
         difference_jacobian`)."""
         drop, Q, dp = self._loads(curve)
@@ -444,7 +442,7 @@ class VesicleOperator(DropOperator):
         u, _ = self._flow(drop, (Q @ coef)[:, None], np.array([dp @ coef]))
         u = u[:, 0]
         u[0::2] += poiseuille(drop.r.ravel()) - V
-        with _LAPACK:
+        with _LAPACK:                        # the lock also guards the counter (threads)
             self.evaluations += 1
         return u * np.repeat(np.sqrt(drop.w.ravel()), 2)
 

@@ -545,7 +545,8 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
     pending: dict = {}
     try:
         pending = {submit(solve_line, str(folder), m, ca, points, have, *args,
-                          parent_pid=parent, threads=threads): (m, ca, points[0]) for m, ca, points, have in jobs}
+                          parent_pid=parent, threads=threads): (m, ca, points[0])
+                   for m, ca, points, have in jobs}
         while pending:
             time.sleep(0.5)
             finished = [f for f in pending if f.done()]
