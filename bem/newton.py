@@ -69,30 +69,30 @@ def _budgeted(fun, deadline, best: list):
     if deadline is None:
         return fun
 
-    def wrapped(z):
+    def check():
         if best and deadline.expired():
             raise _Expired
+
+    def wrapped(z):
+        check()
         F, payload = fun(z)
         norm = float(np.linalg.norm(F))
         if not best or norm < best[0]:
             best[:] = [norm, np.array(z, dtype=float), F, payload]
         return F, payload
 
+    def checked(evaluate):                    # a function of a list of points, budgeted
+        def run(points):
+            check()
+            return evaluate(points)
+        return run
+
     if hasattr(fun, "many"):
-        def many(points):
-            if best and deadline.expired():
-                raise _Expired
-            return fun.many(points)
-        wrapped.many = many
+        wrapped.many = checked(fun.many)
     if hasattr(fun, "fixed"):
         def fixed(payload):
             evaluate, project = fun.fixed(payload)
-
-            def checked(points):
-                if best and deadline.expired():
-                    raise _Expired
-                return evaluate(points)
-            return checked, project
+            return checked(evaluate), project
         wrapped.fixed = fixed
     return wrapped
 
@@ -158,11 +158,19 @@ def _linearised(fun, F, payload, points):
     (variable projection, Kaufman 1975: the same gradient J^T F as the full derivative)."""
     fixed = getattr(fun, "fixed", None) if payload is not None else None
     if fixed is None:
-        def evaluate(pts):
-            return _evaluate_points(fun, pts)
-        return evaluate(points), evaluate, None
-    evaluate, project = fixed(payload)
+        evaluate, project = (lambda pts: _evaluate_points(fun, pts)), None
+    else:
+        evaluate, project = fixed(payload)
     return evaluate(points), evaluate, project
+
+
+def _backward(evaluate, z):
+    """F at ``z``, the backward point of a difference whose forward point was rejected."""
+    F = evaluate([z])[0]
+    if F is None:
+        raise InvalidParameterError("z", "a shape whose neighbours are both rejected",
+                                    "a shape inside the operator's range")
+    return F
 
 
 def difference_jacobian(fun, z, F, fd_step, exact, payload=None):
@@ -183,10 +191,7 @@ def difference_jacobian(fun, z, F, fd_step, exact, payload=None):
     for j, h, z2, F2 in zip(todo, steps, points, values):
         if F2 is None:
             z2[j] -= 2.0 * h
-            F2 = evaluate([z2])[0]
-            if F2 is None:
-                raise InvalidParameterError("z", "a shape whose neighbours are both rejected",
-                                            "a shape inside the operator's range")
+            F2 = _backward(evaluate, z2)
             h = -h
             n_eval += 1
         J[:, j] = (F2 - F) / h
@@ -350,11 +355,7 @@ def _directional_update(fun, z, F, J, Q, fd_step, payload=None):
     for i, Fi in enumerate(values):
         if Fi is None:
             n_eval += 1
-            Fb = evaluate([z - h * Q[:, i]])[0]
-            if Fb is None:
-                raise InvalidParameterError("z", "a shape whose neighbours are both rejected",
-                                            "a shape inside the operator's range")
-            JQ[:, i] = (F - Fb) / h
+            JQ[:, i] = (F - _backward(evaluate, z - h * Q[:, i])) / h
         else:
             JQ[:, i] = (Fi - F) / h
     if project is not None:

@@ -347,7 +347,7 @@ def _dask_threads(client) -> int:
     workers = client.scheduler_info(n_workers=-1)["workers"]
     cores = client.run(os.cpu_count)
     slots: dict = {}
-    for address, info in workers.items():
+    for info in workers.values():
         slots[info["host"]] = slots.get(info["host"], 0) + int(info.get("nthreads", 1))
     per_host = {workers[a]["host"]: c or 1 for a, c in cores.items() if a in workers}
     return max(1, min((per_host.get(h, 1) // n for h, n in slots.items()), default=1))

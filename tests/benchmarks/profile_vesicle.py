@@ -329,7 +329,8 @@ def profile_scaling(modes, repeats: int, newton: bool, nu=0.9, lam=1.0, ca_b=50.
     import numpy as np
 
     import bem.newton as newton_mod
-    from bem.vesicle import VesicleOperator, level_function, lubrication_seed, vesicle_discretisation
+    from bem.vesicle import (VesicleOperator, level_function, lubrication_seed,
+                             vesicle_discretisation)
 
     _, lub = lubrication_seed(nu, lam, ca_b, 16)
     from bem.vesicle import seed_from_lubrication
