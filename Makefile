@@ -40,6 +40,8 @@ benchmark: $(BIN)/vesicle-tube
 	$(BIN)/python tests/benchmarks/bench_vesicle.py
 	$(BIN)/python tests/benchmarks/bench_solution_map.py
 	$(BIN)/python tests/benchmarks/bench_check.py
+	$(BIN)/python tests/benchmarks/bench_infer.py
+	$(BIN)/python tests/benchmarks/bench_map_build.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

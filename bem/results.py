@@ -296,7 +296,9 @@ class VesicleResult(_SpectralSolution):
     shape_class : str
         "parachute" (concave rear, or the rear pole ahead of the rearmost point) or "bullet".
     error_estimate : dict
-        |fine − coarse| of the refinement pair for V_over_U, dp_plus_R0, tension_max.
+        Estimated discretisation error (absolute) of V_over_U, dp_plus_R0, tension_max: the
+        extrapolated tail of the consistent ladder's differences (module docstring of
+        :mod:`bem.vesicle`), or |fine − coarse| of the pair for a given ``n_modes``.
     volume_error, area_error : float
         Relative errors of the volume and area by panel quadrature of the fine mesh.
     residual : float

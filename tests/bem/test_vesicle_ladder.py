@@ -44,6 +44,40 @@ def test_error_estimate_without_contraction_or_with_few_levels():
     assert math.isnan(_error_estimate(_levels([1.0]))["V_over_U"])
 
 
+def test_error_estimate_shares_the_contraction_of_the_outputs(report):
+    """The recorded consistent ladder of the default solve at (0.6, 1.94), Ca_B = 50.01 (64 to
+    96 modes): V/U and gamma_max contract by 0.29-0.37 per level while the dp+ differences are
+    +0.043, +0.056, +0.037. With the median contraction the 96-mode dp+ estimate is within
+    tol = 1e-4 (on dp+'s own ratio 0.66 it was 0.21, 1.2e-4 relative, and the solve ended not
+    converged) and still above the true error against the mode-converged value 1778.364
+    (uncertainty 0.0064, docs/validation.md; independent reference)."""
+    ladder = [(1.021753986284925, 1778.5676773020396, 936.774180895389),
+              (1.0211115492785439, 1778.2286355171807, 984.1322544254806),
+              (1.0208949620553296, 1778.2715180826492, 1001.5407286404236),
+              (1.0208139654246577, 1778.3275483914058, 1007.9805076450023),
+              (1.0207878101933006, 1778.3644295660795, 1009.8686949067805)]
+    outs = [dict(zip(("V_over_U", "dp_plus_R0", "tension_max"), row)) for row in ladder]
+    est = _error_estimate(outs)
+    rho = 0.3228                       # median: V/U's (2.6e-5 / 8.1e-5)
+    d2 = ladder[-1][1] - ladder[-2][1]
+    assert est["dp_plus_R0"] == pytest.approx(ESTIMATE_SAFETY * d2 * rho / (1 - rho), rel=1e-3)
+    assert est["dp_plus_R0"] <= 1e-4 * ladder[-1][1]
+    assert est["dp_plus_R0"] >= abs(ladder[-1][1] - 1778.364) + 0.0064
+    report.value("ves.ladder_5001_dp_estimate", est["dp_plus_R0"] / ladder[-1][1],
+                 reference="<= tol 1e-4 rel, >= true error + reference uncertainty",
+                 tol="1e-4 rel")
+    own = abs(ladder[-1][1] - ladder[-2][1]) / abs(ladder[-2][1] - ladder[-3][1])
+    report.value("ves.ladder_5001_dp_own_estimate",
+                 ESTIMATE_SAFETY * d2 * own / (1 - own) / ladder[-1][1],
+                 reference="the former rule (the output's own contraction)", kind="regression")
+    # an output whose differences grow is estimated at least at its last difference
+    # (V/U and dp+ contracting by 0.1: the tail would be 0.33 times the last difference)
+    grown = _levels([1.3 + 0.2 * 0.1**k for k in (1, 2, 3)])
+    for o, t in zip(grown, (1.0, 1.1, 1.3)):
+        o["tension_max"] = t
+    assert _error_estimate(grown)["tension_max"] == pytest.approx(0.2)
+
+
 @pytest.mark.slow
 def test_default_solve_reaches_the_genuine_state_where_the_lubrication_branch_ends():
     """(0.7, 1.2): the lubrication branch ends at lam/lam_c = 0.875 > 0.69, and a spheroid seed

@@ -17,6 +17,7 @@ The seven cases are the default-option failures of the solver before its consist
 from __future__ import annotations
 
 import argparse
+import math
 import time
 from pathlib import Path
 
@@ -61,12 +62,18 @@ def main() -> None:
         row = {"case": text, "nu": nu, "lam": res.lam, "seconds": seconds,
                "bie_solves": res.bie_solves, "success": res.success, "message": res.message,
                "modes": n, "residual": res.residual, "levels": rows, "keys": {}}
+        # the last three levels of the default ladder (consistent: the solver stops on three)
+        last3 = [dict(zip(("modes", "residual", *KEYS), lv)) for lv in res.refinement[-3:]]
         for k in KEYS:
             ref = reference(rows, k) if rows else float("nan")
             true = abs(getattr(res, k) - ref)
             est = res.error_estimate.get(k, float("nan"))
+            q = [lv[k] for lv in last3]
+            d1, d2 = (abs(q[1] - q[0]), abs(q[2] - q[1])) if len(q) == 3 else (math.nan,) * 2
             row["keys"][k] = {"value": getattr(res, k), "estimate": est, "reference": ref,
-                              "true_error": true, "ratio": est / true if true else float("inf")}
+                              "true_error": true, "ratio": est / true if true else float("inf"),
+                              "contraction": d2 / d1 if d1 else math.nan,
+                              "error_over_last_difference": true / d2 if d2 else math.nan}
             print(f"{text:>12} {seconds:6.0f} {res.bie_solves:5d} {res.success!s:>5} {n:5d} "
                   f"{k:>11} {getattr(res, k):13.8g} {est:9.2e} {true:9.2e} "
                   f"{row['keys'][k]['ratio']:6.1f}", flush=True)
