@@ -860,7 +860,14 @@ def _solve_point(prob: _Problem, initial) -> LubricationResult:
     # cold solutions there use < 5000 at tol = 1e-7): fail early and continue from the anchor.
     cold_nodes = prob.max_nodes if ratio >= ANCHOR_RATIO or initial is not None else 8000
     result = _point(replace(prob, max_nodes=min(prob.max_nodes, cold_nodes)), initial, cold=True)
-    if not result.success and ratio < ANCHOR_RATIO and not prob.deadline.expired():
+    if (not result.success and ratio < ANCHOR_RATIO and prob.deadline.expired()
+            and prob.deadline.message() not in result.message):
+        # the cold start failed on its own and the budget ran out meanwhile: the continuation
+        # that could have reached the point was not tried, which the reason must say
+        result = replace(result, message=f"{result.message}; the continuation from lam/lam_c = "
+                                         f"{ANCHOR_RATIO:g} was not tried: "
+                                         f"{prob.deadline.message()}")
+    elif not result.success and ratio < ANCHOR_RATIO and not prob.deadline.expired():
         logger.info("nu=%.4g lam/lam_c=%.6g: cold start failed, continuing from %g",
                     prob.nu, ratio, ANCHOR_RATIO)
         anchor = _point(replace(prob, lam=ANCHOR_RATIO * prob.lam_c), None, cold=True)

@@ -397,6 +397,20 @@ def test_max_nodes_is_capped_so_that_ctrl_c_is_honoured():
         solve_lubrication(0.9, lam_ratio=0.99, max_nodes=solve_mod.MAX_NODES + 1)
 
 
+def test_cold_start_failing_as_the_budget_runs_out_names_the_budget(monkeypatch):
+    """A cold start that fails on its own while the budget runs out: the continuation that
+    could reach the point is not tried, and the reason says so (with the solver's own)."""
+    def failing(prob, initial, cold):
+        time.sleep(0.06)
+        return solve_mod._failed(prob, "not converged: a stand-in failure", {}, {})
+
+    monkeypatch.setattr(solve_mod, "_point", failing)
+    res = solve_lubrication(0.9, lam_ratio=0.61, ca_b=math.inf, max_time=0.05)
+    assert not res.success
+    assert "a stand-in failure" in res.message and "max_time=0.05" in res.message
+    assert "continuation" in res.message
+
+
 @pytest.mark.parametrize("ca_b", [math.inf, 50.0])
 def test_spent_time_budget_is_a_failed_result_not_an_exception(ca_b):
     """max_time stops a solve within about a second (tested at every right-hand-side
@@ -404,8 +418,9 @@ def test_spent_time_budget_is_a_failed_result_not_an_exception(ca_b):
     for max_time in (1e-320, 0.3):
         clock = time.perf_counter()
         # far from critical: reached by a continuation of 10-20 s from lam/lam_c = 0.98 (at
-        # Ca_B = inf it may instead end sooner, on an idle machine, where the high-Ca model
-        # has no solution: then the budget was not spent and that reason is given)
+        # Ca_B = inf the cold start may instead fail on its own, where the high-Ca model has
+        # no solution: before the budget is spent that reason alone is given, after it the
+        # reason says that the continuation was not tried for lack of time)
         res = solve_lubrication(0.9, lam_ratio=0.61, ca_b=ca_b, max_time=max_time)
         spent = time.perf_counter() - clock
         assert spent < max_time + 1.0 and not res.success
