@@ -59,6 +59,18 @@ __all__ = ["LMReport", "difference_jacobian", "levenberg_marquardt",
            "valley_levenberg_marquardt"]
 
 
+#: the valley method certifies its floor with the Jacobian it has, instead of a fresh one, when
+#: that Jacobian was differenced at this solve and the iterate has moved since by less than
+#: RECENT_STEP (sum of the relative steps), and its promise is below RECENT_MARGIN times
+#: ``promise``. Measured at (0.6, 1.94), Ca_B = 50, levels 72, 80, 88 (moved 3e-5 since their
+#: first fresh Jacobian): the promise 3.7e-9 - 7e-8 with it, 8.7e-7 - 3.6e-6 with a fresh one,
+#: both far below 1e-2; the levels 48-64 (moved 3e-3 - 8e-3) differ by up to 2x (8e-3 against
+#: 6e-3, 2.0e-2 against 9.8e-3) and keep their fresh Jacobian. A Jacobian prolonged from a
+#: coarser level is never recent: its promise was 1e-3 - 2e-2 where a fresh one's was 4-5e-2.
+RECENT_STEP = 1e-3
+RECENT_MARGIN = 0.1
+
+
 class _Expired(Exception):
     """The wall-time budget of a solve was spent (internal; turned into an LMReport)."""
 
@@ -419,7 +431,9 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
     fresh difference Jacobian is made; converged when with it the Gauss–Newton model promises
     less than a ``promise`` relative decrease of |F|^2 (the residual floor of the
     overdetermined equations), or its step is below ``tol`` (a small step of an updated
-    Jacobian, with large damping, proves nothing). At most ``max_jacobians`` difference
+    Jacobian, with large damping, proves nothing). A Jacobian differenced in this solve, since
+    moved by less than ``RECENT_STEP``, certifies the floor itself when it promises less than
+    ``RECENT_MARGIN`` times ``promise`` (no fresh one; measurements at the constants). At most ``max_jacobians`` difference
     Jacobians. ``jacobian``: an approximate Jacobian at ``z0`` (e.g. prolonged from a coarser
     discretisation) used in place of the first difference Jacobian (it is not counted; the
     floor is still certified with a fresh one). ``deadline``: wall-time budget (module
@@ -437,11 +451,12 @@ def _valley_levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd
     history, path = [norm], [z.copy()]
     n_jac, mu = 0, 1e-8
     success, message, it = False, "", 0
+    moved = math.inf                 # relative step since the last difference Jacobian
 
     def fresh_jacobian():
-        nonlocal n_eval, n_jac
+        nonlocal n_eval, n_jac, moved
         J, n = difference_jacobian(fun, z, F, fd_step, {}, payload)
-        n_eval, n_jac = n_eval + n, n_jac + 1
+        n_eval, n_jac, moved = n_eval + n, n_jac + 1, 0.0
         return J
 
     if jacobian is None:
@@ -493,6 +508,7 @@ def _valley_levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd
                 step_vec = step_vec + a * e
                 path[-1] = z.copy()
         step = float(np.max(np.abs(step_vec) / np.maximum(1.0, np.abs(z))))
+        moved += step
         new_norm = float(np.linalg.norm(F))
         gain = new_norm / norm if norm > 0 else 0.0
         norm = new_norm
@@ -505,6 +521,16 @@ def _valley_levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd
             if fresh and step < tol:                # with a fresh J
                 success, message = True, f"converged: relative step {step:.1e} < {tol:.0e}"
                 break
+            if moved < RECENT_STEP:
+                # a difference Jacobian of this level, moved since by less than RECENT_STEP
+                # and updated along the steps and the valley: its promise certifies the floor
+                promised = _promised(J, F, norm)
+                if promised < RECENT_MARGIN * promise:
+                    success = True
+                    message = (f"converged to the residual floor: with the Jacobian differenced "
+                               f"{moved:.1e} (relative step) ago the Gauss–Newton model promises "
+                               f"a {promised:.1e} relative decrease of |F|^2 ({it} steps)")
+                    break
             if n_jac >= max_jacobians:
                 message = (f"|F| stalled at {norm:.3e} with the difference-Jacobian budget "
                            f"({max_jacobians}) spent")

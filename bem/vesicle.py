@@ -162,6 +162,16 @@ Solver paths, before → after (each remaining one with its reason):
   tension modes than shape modes (M = N/2) are cheaper per evaluation but converge later: (0.7,
   1.5) at 64 modes in 17 s instead of 48 in 9 s, (0.61, 1.39) not converged at 80 modes; M = 3N/2
   gains nothing (the same levels, 14.2 s for (0.61, 1.39)); M = N stays.
+* the valley method's floor test: a fresh difference Jacobian at every stall → the Jacobian
+  differenced at this level certifies when the iterate has moved by less than
+  :data:`bem.newton.RECENT_STEP` since (:func:`bem.newton.valley_levenberg_marquardt`). At
+  (0.6, 1.94) the levels 72, 80, 88 no longer difference a second Jacobian: 1476 → 1248 BIE
+  solves, 71–77 s → 62 s on the same machine, converged at 88 modes both, outputs within 2e-9
+  (V/U), 5e-6 (Δp⁺) and 1.5e-4 (γ_max), the same estimates; (0.6, 1.5) 645 → 615 BIE solves;
+  (0.6, 1.94) at Ca_B = 50.01 1803 → 1425 (96 modes both, 95 → 73 s); λ = 1.9399 and 1.9401
+  converge at 88 modes (1418 and 1524 BIE solves, 68 and 79 s). Measured and not adopted: a
+  stall test at 1 % instead of 0.1 % for a Jacobian prolonged from the level below (24 fewer
+  BIE solves at (0.6, 1.94), V/U estimate 8.8e-5 instead of 5.4e-5).
 * evaluations: one after the other → the points of a difference Jacobian and of a
   directional update evaluated concurrently, one per numba thread (:func:`_residuals`; the
   assembly serial on each thread, the products concurrent, the LAPACK calls under a lock);
