@@ -51,6 +51,22 @@ def test_valley_solver_finds_the_least_squares_minimiser_of_a_curved_valley():
     assert np.linalg.norm(rep.F) == pytest.approx(np.linalg.norm(_banana(ref)), rel=1e-10)
 
 
+@pytest.mark.parametrize("n", [4, 6])
+def test_recent_jacobian_certifies_only_a_floor_a_fresh_one_confirms(n):
+    """The floor certified by a Jacobian differenced earlier in the solve (moved since by less
+    than RECENT_STEP) is a floor for a fresh difference Jacobian at the end point too (its
+    Gauss-Newton promise below ``promise``), near scipy's least-squares minimiser."""
+    from bem.newton import _promised
+
+    z0 = np.array([-1.2, 1.0, 0.5, -0.5, 0.3, 0.1])[:n]
+    rep = valley_levenberg_marquardt(lambda z: (_banana(z), None), z0, promise=1e-6,
+                                     max_jacobians=10, directions=2)
+    assert rep.success and "Jacobian differenced" in rep.message, rep.message
+    F = _banana(rep.z)
+    assert _promised(_jac(rep.z), F, np.linalg.norm(F)) < 1e-6
+    assert np.max(np.abs(rep.z - _reference(z0))) < 1e-4
+
+
 def test_valley_solver_reports_an_invalid_start_and_recovers_from_invalid_trials():
     def fun(z):
         if z[0] > 1.5:                                   # e.g. a shape that touches the wall
