@@ -168,6 +168,8 @@ Solver paths, before → after (each remaining one with its reason):
   (0.6, 1.94) the levels 72, 80, 88 no longer difference a second Jacobian: 1476 → 1248 BIE
   solves, 71–77 s → 62 s on the same machine, converged at 88 modes both, outputs within 2e-9
   (V/U), 5e-6 (Δp⁺) and 1.5e-4 (γ_max), the same estimates; (0.6, 1.5) 645 → 615 BIE solves;
+  (0.7, 1.5) 365 → 343, (0.7, 0.95 λc) (its continuation rungs) 895 → 766 (estimates within
+  3.1 times the true errors; ``default_cases.py``);
   (0.6, 1.94) at Ca_B = 50.01 1803 → 1425 (96 modes both, 95 → 73 s); λ = 1.9399 and 1.9401
   converge at 88 modes (1418 and 1524 BIE solves, 68 and 79 s). Measured and not adopted: a
   stall test at 1 % instead of 0.1 % for a Jacobian prolonged from the level below (24 fewer
