@@ -433,11 +433,11 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
     overdetermined equations), or its step is below ``tol`` (a small step of an updated
     Jacobian, with large damping, proves nothing). A Jacobian differenced in this solve, since
     moved by less than ``RECENT_STEP``, certifies the floor itself when it promises less than
-    ``RECENT_MARGIN`` times ``promise`` (no fresh one; measurements at the constants). At most ``max_jacobians`` difference
-    Jacobians. ``jacobian``: an approximate Jacobian at ``z0`` (e.g. prolonged from a coarser
-    discretisation) used in place of the first difference Jacobian (it is not counted; the
-    floor is still certified with a fresh one). ``deadline``: wall-time budget (module
-    docstring).
+    ``RECENT_MARGIN`` times ``promise`` (no fresh one; measurements at the constants). At most
+    ``max_jacobians`` difference Jacobians. ``jacobian``: an approximate Jacobian at ``z0``
+    (e.g. prolonged from a coarser discretisation) used in place of the first difference
+    Jacobian (it is not counted; the floor is still certified with a fresh one).
+    ``deadline``: wall-time budget (module docstring).
     """
     return _within_budget(_valley_levenberg_marquardt, fun, z0, deadline, start, tol=tol,
                           max_iter=max_iter, fd_step=fd_step, max_jacobians=max_jacobians,
