@@ -174,12 +174,6 @@ Solver paths, before → after (each remaining one with its reason):
   converge at 88 modes (1418 and 1524 BIE solves, 68 and 79 s). Measured and not adopted: a
   stall test at 1 % instead of 0.1 % for a Jacobian prolonged from the level below (24 fewer
   BIE solves at (0.6, 1.94), V/U estimate 8.8e-5 instead of 5.4e-5).
-* the first level after a long vesicle's carriers: its Jacobian prolonged from the last carrier
-  → a fresh difference Jacobian (the carrier's was made at its unconverged start). Measured at
-  (0.6, 1.94) with Ca_B = 50 and 50.01 and at λ = 1.9399 and 1.9401: 60.2, 68.0, 61.3, 57.4 s
-  against 61.7, 72.9, 67.8, 78.8 s (the 48-mode level 8.4–11.1 s against 13.6–18.5 s); all
-  converge (the third now at 96 modes, the others as before); the benchmark (0.6, 1.94), fresh
-  processes: 62.6 s (1292 BIE solves) against 62.2 s (1248).
 * evaluations: one after the other → the points of a difference Jacobian and of a
   directional update evaluated concurrently, one per numba thread (:func:`_residuals`; the
   assembly serial on each thread, the products concurrent, the LAPACK calls under a lock);
@@ -1266,12 +1260,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             except InvalidParameterError:
                 pass
         # a carrier starts from a fresh difference Jacobian: one prolonged from the (unfinished)
-        # level below led the cold start of (0.6, 1.94) to Δp⁺ 2829 at 32 modes (1778 converged);
-        # so does the level after the carriers: prolonged from the last carrier's Jacobian (made
-        # at its unconverged start) its valley iterations crawled ~30 steps before a stall, at
-        # (0.6, 1.94) and three neighbours 13.6-18.5 s for the 48-mode level against 8.4-11.1 s
+        # level below led the cold start of (0.6, 1.94) to Δp⁺ 2829 at 32 modes (1778 converged)
         carrier = rebuild is not None and valley and i < rebuild
-        after_carriers = rebuild is not None and valley and i == rebuild
         st = rejected = None
         for k, seed in enumerate(seeds):
             if k:
@@ -1283,8 +1273,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                     nu, lam, ca_b, disc, fit_curve(prev.sample, 0.0, 1.0, n) if seed is None
                     else seed, n, xtol=xtol, max_iter=max_iter, seed_level=not levels,
                     valley=valley, carrier=as_carrier, deadline=deadline,
-                    coarse=(levels[-1][1], levels[-1][0])
-                    if levels and not as_carrier and not after_carriers else None)
+                    coarse=(levels[-1][1], levels[-1][0]) if levels and not as_carrier else None)
                 break
             except InvalidParameterError as exc:
                 rejected = exc
