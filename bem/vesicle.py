@@ -173,7 +173,13 @@ Solver paths, before → after (each remaining one with its reason):
   (0.6, 1.94) at Ca_B = 50.01 1803 → 1425 (96 modes both, 95 → 73 s); λ = 1.9399 and 1.9401
   converge at 88 modes (1418 and 1524 BIE solves, 68 and 79 s). Measured and not adopted: a
   stall test at 1 % instead of 0.1 % for a Jacobian prolonged from the level below (24 fewer
-  BIE solves at (0.6, 1.94), V/U estimate 8.8e-5 instead of 5.4e-5).
+  BIE solves at (0.6, 1.94), V/U estimate 8.8e-5 instead of 5.4e-5); a fresh difference
+  Jacobian, instead of the last carrier's prolonged one, for the first level after a long
+  vesicle's carriers (its valley iterations crawl ~30 steps): (0.6, 1.94) with Ca_B = 50 and
+  50.01 and at λ = 1.9399 and 1.9401 in 60.2, 68.0, 61.3, 57.4 s against 61.7, 72.9, 67.8,
+  78.8 s, but (0.6, 1.5) then stopped at 64 modes with estimates half its true errors
+  (3.96e-6 against 7.38e-6 in V/U; ``default_cases.py``), and the benchmark (0.6, 1.94) in
+  fresh processes took 62.6 s (1292 BIE solves) against 62.2 s.
 * evaluations: one after the other → the points of a difference Jacobian and of a
   directional update evaluated concurrently, one per numba thread (:func:`_residuals`; the
   assembly serial on each thread, the products concurrent, the LAPACK calls under a lock);
