@@ -158,10 +158,11 @@ Solver paths, before → after (each remaining one with its reason):
   (0.6, 1.5) 22 → 17 s, (0.7, 1.5) 10 → 7 s, (0.9, 0.98 λc) 33 → 24 s, (0.7, 0.95 λc) 31 → 21 s,
   (0.6, 1.94) 109 → 67 s (1565 → 1476 BIE solves, converged at 88 modes both, estimates 5.4e-5,
   0.047, 3.5 against 5.1e-5, 0.061, 3.7); (0.61, 1.39) about the same (454 → 456 BIE
-  solves, 12.6–12.7 s → 12.4–12.8 s back to back: at 56 modes the assembly dominates a point). Also measured: fewer
-  tension modes than shape modes (M = N/2) are cheaper per evaluation but converge later: (0.7,
-  1.5) at 64 modes in 17 s instead of 48 in 9 s, (0.61, 1.39) not converged at 80 modes; M = 3N/2
-  gains nothing (the same levels, 14.2 s for (0.61, 1.39)); M = N stays.
+  solves, 12.6–12.7 s → 12.4–12.8 s back to back: at 56 modes the assembly dominates a
+  point). Also measured: fewer tension modes than shape modes (M = N/2) are cheaper per
+  evaluation but converge later: (0.7, 1.5) at 64 modes in 17 s instead of 48 in 9 s, (0.61,
+  1.39) not converged at 80 modes; M = 3N/2 gains nothing (the same levels, 14.2 s for (0.61,
+  1.39)); M = N stays.
 * the valley method's floor test: a fresh difference Jacobian at every stall → the Jacobian
   differenced at this level certifies when the iterate has moved by less than
   :data:`bem.newton.RECENT_STEP` since (:func:`bem.newton.valley_levenberg_marquardt`). At

@@ -6,9 +6,10 @@ Run with ``python tests/benchmarks/bench_vesicle.py [--cases short,rbc,long,swee
 interpreter (numba cache warm, compiled by a small solve before the clock starts), one at a
 time, so that its peak resident memory (``ru_maxrss``) is its own; ``threads`` records numba's
 thread count, which also bounds the concurrent Jacobian evaluations of the solver. The table
-gives the minimum and median wall time of the runs, the number of boundary-integral solves (BEM evaluations,
-continuation rungs included; the same in every run) beside the 10^4-10^5 semi-implicit time
-steps of Chen et al. 2020 (one BIE solve each), and the solution with its error estimate.
+gives the minimum and median wall time of the runs, the number of boundary-integral solves
+(BEM evaluations, continuation rungs included; the same in every run) beside the 10^4-10^5
+semi-implicit time steps of Chen et al. 2020 (one BIE solve each), and the solution with its
+error estimate.
 Each case run is stored under ``cases/<case>`` of ``docs/data/bench_vesicle.json`` with its
 parameters, runs and the machine (``tests/benchmarks/bench_store.py``); cases run separately
 accumulate there, a new run of a case replaces only that case.
