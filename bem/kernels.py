@@ -49,71 +49,54 @@ _LN4 = math.log(4.0)
 # --------------------------------------------------------------------------------------------
 # Complete elliptic integrals K(m), E(m) as functions of m1 = 1 - m
 # --------------------------------------------------------------------------------------------
-@numba.njit(cache=True)
-def _ke_series_m1(m1):
-    """K and E for small m1 by the logarithmic series about m = 1 (Byrd & Friedman 900.05/07).
-
-    K = sum_n a_n m1^n (L - b_n), E = 1 + sum_{n>=1} c_n m1^n (L - d_n), L = ln(4/sqrt(m1)),
-    a_n = [(1/2)_n/n!]^2, c_n = [(1/2)_n/n!][(1/2)_{n-1}/(n-1)!],
-    b_n = 2 sum_{j<=n} 1/((2j-1)2j), d_n = b_{n-1} + 1/((2n-1)2n). Terms fall like m1^n.
-    """
-    L = _LN4 - 0.5 * math.log(m1)
-    K = L
-    E = 1.0
-    g = 1.0          # (1/2)_n / n!
-    b = 0.0          # b_n
-    p = m1           # m1^n
-    for n in range(1, 40):
-        g_prev = g
-        g *= (n - 0.5) / n         # the ratio depends on n only: no division in the chain
-        t = 1.0 / ((2.0 * n - 1.0) * (2.0 * n))
-        d = b + t
-        b = b + 2.0 * t
-        dK = g * g * p * (L - b)
-        dE = g * g_prev * p * (L - d)
-        K += dK
-        E += dE
-        if abs(dK) < 1e-17 * K and abs(dE) < 1e-17 * E:
-            break
-        p *= m1
-    return K, E
-
-
-@numba.njit(cache=True)
-def _ke_agm(m1):
-    """K and E by the arithmetic-geometric mean started from b0 = sqrt(m1) (no 1 - m).
-
-    a - b falls quadratically, a_(n+1) - b_(n+1) ~ (a_n - b_n)^2/(8 a): once a_n - b_n is below
-    1e-8 a, the step taken is the last that changes anything. (Testing the new a - b against
-    1e-16 a instead never stopped when a, b ended one rounding apart: 40 iterations, a quarter
-    of all calls for m1 in [0.05, 1], 13 on average against 4-5.)
-    """
-    a = 1.0
-    b = math.sqrt(m1)
-    s = 0.5 * (1.0 + m1)       # 1 - c0^2/2 with c0^2 = m = 1 - m1, formed without cancellation
-    w = 0.5
-    for _ in range(40):
-        c = 0.5 * (a - b)
-        w *= 2.0
-        s -= w * c * c
-        a, b = 0.5 * (a + b), math.sqrt(a * b)
-        if c <= 0.5e-8 * a:
-            break
-    K = 0.5 * _PI / a
-    return K, K * s
+# Cephes ellpk/ellpe (S. L. Moshier, *Methods and Programs for Mathematical Functions*, 1989;
+# the approximations behind scipy.special.ellipkm1 and ellipe): K(1 - m1) = P_K(m1) -
+# ln(m1) Q_K(m1), E(1 - m1) = P_E(m1) - ln(m1) m1 Q_E(m1), coefficients from the highest power
+_K_P = (1.37982864606273237150e-4, 2.28025724005875567385e-3, 7.97404013220415179367e-3,
+        9.85821379021226008714e-3, 6.87489687449949877925e-3, 6.18901033637687613229e-3,
+        8.79078273952743772254e-3, 1.49380448916805252718e-2, 3.08851465246711995998e-2,
+        9.65735902811690126535e-2, 1.38629436111989062502e0)
+_K_Q = (2.94078955048598507511e-5, 9.14184723865917226571e-4, 5.94058303753167793257e-3,
+        1.54850516649762399335e-2, 2.39089602715924892727e-2, 3.01204715227604046988e-2,
+        3.73774314173823228969e-2, 4.88280347570998239232e-2, 7.03124996963957469739e-2,
+        1.24999999999870820058e-1, 4.99999999999999999821e-1)
+_E_P = (1.53552577301013293365e-4, 2.50888492163602060990e-3, 8.68786816565889628429e-3,
+        1.07350949056076193403e-2, 7.77395492516787092951e-3, 7.58395289413514708519e-3,
+        1.15688436810574127319e-2, 2.18317996015557253103e-2, 5.68051945617860553470e-2,
+        4.43147180560990850618e-1, 1.00000000000000000299e0)
+_E_Q = (3.27954898576485872656e-5, 1.00962792679356715133e-3, 6.50609489976927491433e-3,
+        1.68862163993311317300e-2, 2.61769742454493659583e-2, 3.34833904888224918614e-2,
+        4.27180926518931511717e-2, 5.85936634471101055642e-2, 9.37499997197644278445e-2,
+        2.49999999999888314361e-1)
+_EPS = 1.11022302462515654042e-16
 
 
 @numba.njit(cache=True)
 def ellipke_m1(m1):
     """Complete elliptic integrals (K(m), E(m)) of parameter m = 1 - m1, from m1 in (0, 1].
 
-    Relative accuracy ~1e-15 for all m1, including m1 -> 0 where K ~ ln(4/sqrt(m1)).
+    Cephes' polynomial approximations in m1 with the logarithmic singularity at m1 = 0 split
+    off (peak relative errors 2.5e-16 and 1.5e-16 in IEEE arithmetic, Moshier 1989; at most
+    2.2e-16 against mpmath over 800 values of m1 from 1e-300 to 1); below m1 = 2^-53,
+    K = ln 4 - ln(m1)/2 and E = 1. One logarithm and 42 multiply-adds: 20-26 ns per pair
+    against 31 ns for the arithmetic-geometric mean and 79 ns for the logarithmic series about
+    m = 1 (m1 < 0.05) that served before, measured on one core; a ring Stokeslet of the
+    elliptic branch 43 instead of 65 ns.
     """
-    # Below m1 = 0.05 the log series needs <= 12 terms; above it the AGM's E = K*s loses less
-    # than one digit to cancellation (s is not small).
-    if m1 < 0.05:
-        return _ke_series_m1(m1)
-    return _ke_agm(m1)
+    if m1 <= _EPS:
+        return _LN4 - 0.5 * math.log(m1), 1.0
+    L = math.log(m1)
+    pk = _K_P[0]
+    qk = _K_Q[0]
+    pe = _E_P[0]
+    for i in range(1, 11):
+        pk = pk * m1 + _K_P[i]
+        qk = qk * m1 + _K_Q[i]
+        pe = pe * m1 + _E_P[i]
+    qe = _E_Q[0]
+    for i in range(1, 10):
+        qe = qe * m1 + _E_Q[i]
+    return pk - L * qk, pe - L * m1 * qe
 
 
 @numba.njit(cache=True)

@@ -133,9 +133,16 @@ def tension_profile(curve: SpectralCurve, g, tau):
 
 def tension_force(curve: SpectralCurve, g, tau):
     r"""Tension force on the fluid :math:`-2\gamma H n + (d\gamma/ds)\,t` at ``tau``, for
-    :math:`\gamma = \sum_k g_k\cos(k\pi\tau)` (k = 0..len(g)-1). Returns (f_x, f_r)."""
-    basis = tension_basis(curve, tau, len(g))
-    return tuple(np.tensordot(np.asarray(g, dtype=float), basis[:, i], axes=1) for i in (0, 1))
+    :math:`\gamma = \sum_k g_k\cos(k\pi\tau)` (k = 0..len(g)-1). Returns (f_x, f_r).
+
+    Summed directly (:func:`tension_profile`), not as ``g`` times :func:`tension_basis`: the
+    load of one tension at 96 modes without the (M, 2, nodes) basis."""
+    tau = np.asarray(tau, dtype=float)
+    gam, dgam = tension_profile(curve, g, tau)
+    psi = curve.tangent_angle(tau)
+    tx, tr = np.cos(psi), np.sin(psi)
+    two_gh = 2.0 * gam * curve.mean_curvature(tau)
+    return two_gh * tr + dgam * tx, -two_gh * tx + dgam * tr
 
 
 def tension_basis(curve: SpectralCurve, tau, n_terms: int) -> np.ndarray:

@@ -193,20 +193,23 @@ class SpectralCurve:
     def _integrals(self, u, front: bool):
         """(int_0^1 g cos phi dt, int_0^1 g sin phi dt), argument u t, at distances u.
 
-        Computed as cumulative sums over the sorted distances: each gap between neighbours
-        (split into pieces of at most 16 / (3 quad) in u) gets a 16-point Gauss rule, i.e. at
-        least 1.5x the node density of one ``quad``-point rule over [0, 1/2], which integrates
-        the band-limited integrand to round-off (tested against a 4x finer single rule)."""
+        Cumulative integrals of the pieces' interpolating polynomials
+        (:func:`bem.series.pole_integrals`): pieces of 4 / ``quad`` in u with a 24-point Gauss
+        rule each, i.e. 3x the node density of one ``quad``-point rule over [0, 1/2] (an
+        interpolant needs about twice the nodes of a rule for the same error): round-off
+        agreement with a 4x finer single rule per point (tests). Against the former 16-point
+        rule per gap between neighbouring points, a curve's 256 panel nodes of one half cost
+        0.34 instead of 1.29 ms at 96 modes (30 points: 0.26 against 0.21 ms)."""
         from . import series
 
         u = np.asarray(u, dtype=float)
         flat = u.ravel()
         order = np.argsort(flat)
-        t, w = _gauss01(16)
+        t, w = _gauss01(24)
         c, a = self._pole_coefficients(front)
         ic, is_ = series.pole_integrals(np.ascontiguousarray(c), np.ascontiguousarray(a),
                                         np.ascontiguousarray(flat[order]), t, w,
-                                        3.0 * self._quad / 16.0)
+                                        self._quad / 4.0)
         out_c, out_s = np.empty_like(flat), np.empty_like(flat)
         out_c[order], out_s[order] = ic, is_
         return out_c.reshape(u.shape), out_s.reshape(u.shape)

@@ -249,6 +249,7 @@ Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import threading
@@ -266,7 +267,7 @@ from lubrication.geometry import critical_length, resolve_confinement
 from .assembly import poiseuille
 from .drop import DropDiscretisation, DropOperator, _panels_for
 from .drop import _mode_count as _drop_mode_count  # one check, the vesicle's MAX_MODES
-from .membrane import bending_force, tension_basis, tension_profile
+from .membrane import bending_force, tension_basis, tension_force, tension_profile
 from .newton import difference_jacobian, levenberg_marquardt, valley_levenberg_marquardt
 from .quadrature import (
     DEFAULT_ORDER,
@@ -401,9 +402,10 @@ class VesicleOperator(DropOperator):
         q = qw[:, 0] + qw[:, 1:] @ np.asarray(g, dtype=float)
         return self.wall.x.ravel(), 4.0 - q[0::2]
 
-    def _loads(self, curve: SpectralCurve):
+    def _loads(self, curve: SpectralCurve, g=None):
         """Membrane panels and the load columns Q (interleaved x, r; bending force, then the
-        tension modes) with their Δp⁺ columns."""
+        tension modes) with their Δp⁺ columns; with tension coefficients ``g``, the one column
+        of the total load (bending plus that tension)."""
         drop = self.panels(curve)
         if np.max(drop.r) >= 1.0 - 1e-6:
             raise InvalidParameterError("shape", "a membrane touching the wall (closing film)",
@@ -411,10 +413,15 @@ class VesicleOperator(DropOperator):
         tau = self.tau.ravel()
         nd = tau.size
         fb = bending_force(curve, tau, self.kappa)
-        T = tension_basis(curve, tau, self.n_tension)                   # (M, 2, nd)
-        Q = np.empty((2 * nd, self.n_tension + 1))
-        Q[0::2, 0], Q[1::2, 0] = fb
-        Q[0::2, 1:], Q[1::2, 1:] = T[:, 0].T, T[:, 1].T
+        if g is None:
+            T = tension_basis(curve, tau, self.n_tension)               # (M, 2, nd)
+            Q = np.empty((2 * nd, self.n_tension + 1))
+            Q[0::2, 0], Q[1::2, 0] = fb
+            Q[0::2, 1:], Q[1::2, 1:] = T[:, 0].T, T[:, 1].T
+        else:
+            ft = tension_force(curve, g, tau)
+            Q = np.empty((2 * nd, 1))
+            Q[0::2, 0], Q[1::2, 0] = fb[0] + ft[0], fb[1] + ft[1]
         rb, wb = drop.r.ravel(), drop.w.ravel()
         dp = -4.0 * (rb * (1.0 - rb * rb) * wb) @ Q[0::2]                # per column
         return drop, Q, dp
@@ -470,9 +477,8 @@ class VesicleOperator(DropOperator):
         threads). Its differences, projected off the range of the tension and V columns,
         are the variable-projection Jacobian of Kaufman (1975) (:func:`bem.newton.
         difference_jacobian`)."""
-        drop, Q, dp = self._loads(curve)
-        coef = np.concatenate(([1.0], np.asarray(g, dtype=float)))
-        u, _ = self._flow(drop, (Q @ coef)[:, None], np.array([dp @ coef]))
+        drop, Q, dp = self._loads(curve, g)
+        u, _ = self._flow(drop, Q, dp)
         u = u[:, 0]
         u[0::2] += poiseuille(drop.r.ravel()) - V
         with _LAPACK:                        # the lock also guards the counter (threads)
@@ -594,7 +600,10 @@ def seed_from_lubrication(lub, n_modes: int, density: str = "uniform",
 
 def fit_lubrication(lub, n_modes: int, density=()) -> SpectralCurve:
     """Spectral curve with ``n_modes`` modes (and arc-length ``density`` coefficients) fitted to
-    a converged LubricationResult's shape."""
+    a converged LubricationResult's shape, moved along the axis so that its centroid is at
+    x = 0, where the solver centres every shape (the lubrication shape starts at x = 0: as a
+    seed it placed the first level's wall, whose finest panels follow the reference curve,
+    beside the front half of the vesicle only)."""
     s = np.asarray(lub.s)
     keep = np.concatenate([[True], np.diff(s) > 1e-12])
     s, x, r, psi = s[keep], np.asarray(lub.x)[keep], np.asarray(lub.r)[keep], \
@@ -606,7 +615,8 @@ def fit_lubrication(lub, n_modes: int, density=()) -> SpectralCurve:
         p = sp(t)
         return sx(t), np.clip(sr(t), 0.0, None), np.cos(p), -np.sin(p)
 
-    return fit_curve(curve, float(s[0]), float(s[-1]), n_modes, density=density)
+    fit = fit_curve(curve, float(s[0]), float(s[-1]), n_modes, density=density)
+    return dataclasses.replace(fit, x0=fit.x0 - fit.centroid())
 
 
 def spheroid_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:

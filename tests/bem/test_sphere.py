@@ -190,10 +190,13 @@ def test_sphere_converges_to_the_requested_accuracy(lam, report):
 def test_near_contact_velocity_and_convergence(report):
     """Near contact V/U = 1 + 4ε/3 + O(ε²) (notes §3; Bungay & Brenner 1973), measured
     (V/U - 1 - 4ε/3)/ε² = 0.23, 0.21, 0.17, 0.14 at ε = 0.1, 0.05, 0.02, 0.01; converged.
-    The quiescent drag approaches the lubrication limit derived for zero net flux."""
-    for lam in (0.95, 0.99):
+    The quiescent drag approaches the lubrication limit derived for zero net flux. At
+    λ = 0.99 the drag's refinement pair has a round-off floor of a few 1e-9 (3.7e-9 on an AMD
+    EPYC, below 1e-9 on an Intel Xeon, with the same code), so it is converged to 1e-8, far
+    below the 1.5 ε tested."""
+    for lam, tol in ((0.95, 1e-9), (0.99, 1e-8)):
         eps = 1 - lam
-        res = solve_sphere(lam, tol=1e-9)
+        res = solve_sphere(lam, tol=tol)
         assert res.converged, res.message
         c2 = report.value(f"sphere.contact_c2_{lam}", (res.V_over_U - 1 - 4 * eps / 3) / eps**2,
                           reference=0.0, tol="±0.3",
