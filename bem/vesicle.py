@@ -517,18 +517,28 @@ WALL_BODY_LENGTH = 6.0
 #: membrane panel count above which the wall panels beside the vesicle stop following it
 #: (:attr:`bem.drop.DropDiscretisation.wall_body_panels`): the wall's share of the error is
 #: already far below the ladder's there. Measured on fixed shapes at Ca_B = 50 against a wall
-#: refined twice (outputs V/U, Δp⁺, γ_max, relative): (0.6, 0.98 lam_c) 64 / 96 modes ≤ 7.8e-9
-#: / 9.3e-10 (unlimited: 3.8e-9 / 1.7e-10), and ≤ 3.5e-9 on the stored map shapes (0.9, 0.98
-#: lam_c), (0.7, 0.95 lam_c), (0.6, 0.8 lam_c), (0.6, 0.95 lam_c) at their own mode count and
-#: 80 modes; the largest wall shear on the nodes moves by up to 5.8e-4 (sampling of its peak;
-#: 6.7e-5 unlimited). One evaluation at 96 modes of (0.6, 0.98 lam_c): 0.21 s → 0.14 s (wall
-#: nodes 1792 → 976)
-WALL_BODY_PANELS = 16
+#: refined twice (outputs V/U, Δp⁺, γ_max, relative): with 16, (0.6, 0.98 lam_c) 64 / 96 modes
+#: ≤ 7.8e-9 / 9.3e-10 (unlimited: 3.8e-9 / 1.7e-10), and ≤ 3.5e-9 on the stored map shapes
+#: (0.9, 0.98 lam_c), (0.7, 0.95 lam_c), (0.6, 0.8 lam_c), (0.6, 0.95 lam_c) at their own mode
+#: count and 80 modes; the largest wall shear on the nodes moves by up to 5.8e-4 (sampling of
+#: its peak; 6.7e-5 unlimited). One evaluation at 96 modes of (0.6, 0.98 lam_c): 0.21 s → 0.14
+#: s (wall nodes 1792 → 976). Re-measured with 14 on the default 96-mode minimum of (0.6,
+#: 1.94) against 32: 3.1e-10 (V/U), 2.6e-10 (Δp⁺), residual (a maximum over the nodes) 1.257e-4
+#: against 1.247e-4; wall nodes 992 → 880, a Jacobian point at 96 modes 108–116 → 103.5 ms
+#: on one thread (55–60 → 53–58 ms with two, back to back); the six shorter default cases take
+#: the same levels and BIE solves (``default_cases.py``). With 12 (768 nodes) the outputs still
+#: agree to 2.2e-9, but the residual rose to 1.336e-4, and at the stored 64-mode shape by
+#: 2.6e-6 (the test bound is 1e-7); with 8 it rose to 4.7e-4
+WALL_BODY_PANELS = 14
 
 
 def vesicle_discretisation(n_modes: int, order: int = DEFAULT_ORDER,
                            n_panels: int | None = None) -> DropDiscretisation:
-    """Resolution of a vesicle level with ``n_modes`` shape modes (panels as for the drop)."""
+    """Resolution of a vesicle level with ``n_modes`` shape modes (panels as for the drop: one
+    per three modes; measured and not adopted, one per four modes: a Jacobian point at 96
+    modes of (0.6, 1.94) 65 → 54 ms, outputs at its fixed minimum within 1.7e-8, but the
+    default solve of (0.7, 0.95 lam_c) then ended with a γ_max estimate of half its true
+    error, 0.075 against 0.137, ``default_cases.py``)."""
     return DropDiscretisation(n_modes=n_modes, n_panels=n_panels or _panels_for(n_modes),
                               order=order, wall_refinement=WALL_REFINEMENT,
                               wall_body_length=WALL_BODY_LENGTH,
