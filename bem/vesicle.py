@@ -191,9 +191,12 @@ Solver paths, before → after (each remaining one with its reason):
   228 s → 165 s (before the wall cap).
 * curve work (closed curves, sampling, curvatures, bending force): the Clenshaw sums in
   numpy, one array operation per coefficient → in numba (:mod:`bem.series`; at
-  (0.61, 1.39) the curve work was 35 % of the solve). The results move by rounding, which
-  changes the unconverged carrier levels of (0.6, 1.94) and with them its path: with the
-  bending-force sums in numba 1819 BIE solves in 119 s (converged at 96 modes, estimates
+  (0.61, 1.39) the curve work was 35 % of the solve) → the position integrals from piecewise
+  interpolants (:func:`bem.series.pole_integrals`; over a default solve of (0.6, 1.94),
+  ``profile_vesicle.py``: 27 449 calls in 20.7 s → 25 024 in 7.4 s of thread time) and a
+  Jacobian point's tension load summed from its series (:func:`bem.membrane.tension_force`,
+  not from the M-mode basis). The results move by rounding, which changes the unconverged
+  carrier levels of (0.6, 1.94) and with them its path: with the bending-force sums in numba 1819 BIE solves in 119 s (converged at 96 modes, estimates
   4.7e-5, 0.039, 4.1 for V/U, Δp⁺, γ_max against true errors 5.9e-6, 0.005, 1.1); with the
   position integrals in numba too 1565 BIE solves in 107 s (converged at 88 modes,
   estimates 5.1e-5, 0.061, 3.7 against 6.8e-6, 0.002, 1.3). Which level converges is
@@ -219,7 +222,15 @@ Solver paths, before → after (each remaining one with its reason):
   stops on the valley's side, γ_max 799 instead of 932 at (0.6, 1.94), 64 modes); the
   prolonged Jacobian now serves both (before: plain only).
 * seeds: lubrication → spheroid → capsule, into lubrication at the target → lubrication at
-  0.9 λc → spheroid → capsule (above).
+  0.9 λc → spheroid → capsule (above). The lubrication shape is now moved to the centroid
+  x = 0 where the solver keeps every shape (:func:`fit_lubrication`): it started at x = 0, and
+  the first level's wall, whose finest panels follow the seed, was fine beside the front half
+  of the vesicle only (at (0.6, 1.94) panels 0.36–2.7 R long beside the rear film). Measured
+  with ``default_cases.py`` (paths, not only times, change): (0.6, 1.94) 1477 → 1464 BIE
+  solves, 96 modes both, estimates 4.4e-5, 0.018, 3.7 → 1.7e-5, 0.026, 1.25, residual 1.8e-4
+  → 1.25e-4; (0.7, 1.2) 414 → 402, (0.7, 1.5) 343 → 308, (0.7, 0.95 λc) 766 → 633, but
+  (0.6, 1.5) 615 → 700 (72 instead of 64 modes); estimates within 1–10 times the true errors
+  as before, except the three pairs of docs/validation.md.
 * three fallbacks, each met by the map build: a given initial shape that cannot start at the
   target (its film closes once the volume is re-imposed: (0.98, 0.98 λc) from the 0.95 λc
   shape) is replaced by the solver's own seed; a re-built density that the next level cannot

@@ -157,12 +157,14 @@ def test_observed_order_study(lam, order, expected, report):
     """Overall observed order (first to last mesh) of V/U, Δp⁺ and K with p Gauss nodes per
     panel. Measured: p=4: 3.3-4.1 (lam 0.5), 2.9-3.3 (0.9); p=6: 6-7 (0.5), 4.3-6 (0.9, Δp⁺
     has a plateau where its error changes sign); p=8: 9-12 (both). Order ~p: the density
-    is interpolated at degree p-1 in the near and self panels."""
+    is interpolated at degree p-1 in the near and self panels. Round-off: 1e-12, and 3e-11 for
+    the drag at lam = 0.9 (p=8: 9.5e-11 at 14 panels, 1.1e-11 at 21 where order 8 predicts
+    3.7e-12; on an AMD EPYC, with the former and the present elliptic integrals alike)."""
     ref = solve_sphere_mesh(lam, 16)
     ns = np.array([14, 21, 32, 48]) if order < 8 else np.array([6, 9, 14, 21])
     err = _errors(lam, order, ns, ref)
     for k, e in err.items():
-        keep = e > 1e-12                         # above round-off
+        keep = e > (3e-11 if k == "drag_K" and lam == 0.9 else 1e-12)   # above round-off
         ns_k, e_k = ns[keep], e[keep]
         o = math.log(e_k[0] / e_k[-1]) / math.log(ns_k[-1] / ns_k[0])
         report.value(f"sphere.study{order}_{lam}_{k}", o, reference=order,
