@@ -76,9 +76,9 @@ def pole_integrals(c, a, us, t, w, pieces_per_u):
     exactly; its integral from the piece's start to s (in units of the piece) is
     b_0 s + (1/2) sum_{k>=1} b_k (P_{k+1}(x) - P_{k-1}(x)), x = 2 s - 1 (from
     (2k + 1) P_k = (P_{k+1} - P_{k-1})', Abramowitz & Stegun 22.8.5), which is b_0 at s = 1.
-    The integrand is evaluated on the pieces' nodes only, not once per point and gap: a
-    curve's panel nodes (hundreds of points) cost a few hundred integrand values instead of
-    16 per point."""
+    The integrand is evaluated on the pieces' nodes (and, for the few points in the first
+    piece, on the rule over [0, u] itself), not once per point and gap: a curve's panel nodes
+    (hundreds of points) cost a few hundred integrand values instead of 16 per point."""
     n = us.size
     p = t.size
     oc = np.empty(n)
