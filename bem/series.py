@@ -66,6 +66,16 @@ def pole_terms(c, a, u):
 
 
 @numba.njit(cache=True, nogil=True)
+def _legendre(x, out):
+    """out[k] = P_k(x), k = 0 .. out.size - 1, by (k + 1) P_{k+1} = (2k + 1) x P_k - k P_{k-1}."""
+    out[0] = 1.0
+    if out.size > 1:
+        out[1] = x
+    for k in range(1, out.size - 1):
+        out[k + 1] = ((2.0 * k + 1.0) * x * out[k] - k * out[k - 1]) / (k + 1.0)
+
+
+@numba.njit(cache=True, nogil=True)
 def pole_integrals(c, a, us, t, w, pieces_per_u):
     r"""(int_0^1 g cos phi dt, int_0^1 g sin phi dt) with argument u t at the sorted distances
     ``us`` from a pole: the integrals from 0 to u divided by u; at u = 0 the limits (g(0), 0).
@@ -87,15 +97,11 @@ def pole_integrals(c, a, us, t, w, pieces_per_u):
         return oc, os_
     # Legendre values at the rule's nodes, times the weights: lw[k, j] = w_j P_k(2 t_j - 1)
     lw = np.empty((p, p))
+    leg = np.empty(p + 1)
     for j in range(p):
-        x = 2.0 * t[j] - 1.0
-        pm, pk = 1.0, x
-        lw[0, j] = w[j]
-        if p > 1:
-            lw[1, j] = w[j] * x
-        for k in range(1, p - 1):
-            pm, pk = pk, ((2.0 * k + 1.0) * x * pk - k * pm) / (k + 1.0)
-            lw[k + 1, j] = w[j] * pk
+        _legendre(2.0 * t[j] - 1.0, leg)
+        for k in range(p):
+            lw[k, j] = w[j] * leg[k]
     g0, _ = pole_terms(c, a, 0.0)
     umax = us[n - 1]
     pieces = max(1, int(math.ceil(umax * pieces_per_u)))
@@ -140,17 +146,13 @@ def pole_integrals(c, a, us, t, w, pieces_per_u):
                 i += 1
                 continue
             s = (us[i] - start) / h
-            x = 2.0 * s - 1.0
+            _legendre(2.0 * s - 1.0, leg)
             vc = bc[0] * s
             vs = bs[0] * s
-            # P_{k-1}, P_k, P_{k+1} by the three-term recurrence
-            pm, pk = 1.0, x
             for k in range(1, p):
-                pn = ((2.0 * k + 1.0) * x * pk - k * pm) / (k + 1.0)
-                d = 0.5 * (pn - pm)
+                d = 0.5 * (leg[k + 1] - leg[k - 1])
                 vc += bc[k] * d
                 vs += bs[k] * d
-                pm, pk = pk, pn
             oc[i] = (ic + h * vc) / us[i]
             os_[i] = (is_ + h * vs) / us[i]
             i += 1

@@ -196,8 +196,9 @@ Solver paths, before → after (each remaining one with its reason):
   ``profile_vesicle.py``: 27 449 calls in 20.7 s → 25 024 in 7.4 s of thread time) and a
   Jacobian point's tension load summed from its series (:func:`bem.membrane.tension_force`,
   not from the M-mode basis). The results move by rounding, which changes the unconverged
-  carrier levels of (0.6, 1.94) and with them its path: with the bending-force sums in numba 1819 BIE solves in 119 s (converged at 96 modes, estimates
-  4.7e-5, 0.039, 4.1 for V/U, Δp⁺, γ_max against true errors 5.9e-6, 0.005, 1.1); with the
+  carrier levels of (0.6, 1.94) and with them its path: with the bending-force sums in
+  numba 1819 BIE solves in 119 s (converged at 96 modes, estimates 4.7e-5, 0.039, 4.1 for
+  V/U, Δp⁺, γ_max against true errors 5.9e-6, 0.005, 1.1); with the
   position integrals in numba too 1565 BIE solves in 107 s (converged at 88 modes,
   estimates 5.1e-5, 0.061, 3.7 against 6.8e-6, 0.002, 1.3). Which level converges is
   decided by the unconverged carriers, not by the physics: compare BIE solves and error
