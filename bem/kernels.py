@@ -586,3 +586,228 @@ def cross_influence_matrix_serial(ax, ar, aw, acx, acr, bx, br, bw_, bcx, bcr, t
     for c in range(n_chunks):
         _cross_panels(c, n_chunks, ax, ar, aw, acx, acr, bx, br, bw_, bcx, bcr, tn, bw, gx, gw,
                       near, tol, out_ab, out_ba)
+
+
+# --------------------------------------------------------------------------------------------
+# Linearised cross interaction: a moving panel set (membrane) and a fixed one (wall)
+# --------------------------------------------------------------------------------------------
+#: relative step (to the source-field distance) of the central differences of the ring
+#: Stokeslet in :func:`cross_far_taylor`: truncation ~ STEP^2/6 and rounding ~ 1e-16/STEP of
+#: the kernel's scale, both ~1e-11 at 1e-5
+TAYLOR_STEP = 1e-5
+
+
+@numba.njit(cache=True)
+def near_flags(tx, tr, px, pr, pw, near, out):
+    """out[i, P] = target (tx[i], tr[i]) lies within ``near`` lengths of panel P (the test of
+    the influence kernels, :func:`_near_panel`)."""
+    for i in range(tx.shape[0]):
+        for P in range(px.shape[0]):
+            out[i, P] = _near_panel(tx[i], tr[i], px, pr, pw, P, near)[0]
+
+
+@numba.njit(cache=True)
+def _ring_taylor(x0, r0, x, r):
+    """Ring Stokeslet M(x0, r0; x, r) and its derivatives in the source position (x, r), by
+    central differences of step TAYLOR_STEP times the distance (r - step stays >= r/2):
+    (M, dM/dx, dM/dr), each a 4-tuple (xx, xr, rx, rr)."""
+    d = math.sqrt((x0 - x) ** 2 + (r0 - r) ** 2)
+    h = TAYLOR_STEP * d
+    hr = min(h, 0.5 * r)
+    M = ring_stokeslet(x0, r0, x, r)
+    xp = ring_stokeslet(x0, r0, x + h, r)
+    xm = ring_stokeslet(x0, r0, x - h, r)
+    rp = ring_stokeslet(x0, r0, x, r + hr)
+    rm = ring_stokeslet(x0, r0, x, r - hr)
+    ix = 0.5 / h
+    ir = 0.5 / hr
+    Dx = ((xp[0] - xm[0]) * ix, (xp[1] - xm[1]) * ix, (xp[2] - xm[2]) * ix,
+          (xp[3] - xm[3]) * ix)
+    Dr = ((rp[0] - rm[0]) * ir, (rp[1] - rm[1]) * ir, (rp[2] - rm[2]) * ir,
+          (rp[3] - rm[3]) * ir)
+    return M, Dx, Dr
+
+
+@numba.njit(cache=True)
+def _taylor_panels(c, n_chunks, ax, ar, aw, bx, br, near_ab, near_ba, A_ab, A_ba):
+    """The a-panels P = c, c + n_chunks, ... of :func:`cross_far_taylor`."""
+    na_pan, p = ax.shape
+    nb = bx.size
+    n2 = 2 * nb
+    for P in range(c, na_pan, n_chunks):
+        for ka in range(p):
+            i = P * p + ka
+            x0 = ax[P, ka]
+            r0 = ar[P, ka]
+            f0 = aw[P, ka] * r0
+            for j in range(nb):
+                Q = j // p
+                x = bx[Q, j - Q * p]
+                r = br[Q, j - Q * p]
+                far_ab = not near_ab[i, Q]
+                far_ba = not near_ba[j, P]
+                if not (far_ab or far_ba):
+                    continue
+                M, Dx, Dr = _ring_taylor(x0, r0, x, r)
+                if far_ab:
+                    for c3 in range(3):
+                        T = M if c3 == 0 else (Dx if c3 == 1 else Dr)
+                        A_ab[2 * i, c3 * n2 + 2 * j] = T[0]
+                        A_ab[2 * i, c3 * n2 + 2 * j + 1] = T[1]
+                        A_ab[2 * i + 1, c3 * n2 + 2 * j] = T[2]
+                        A_ab[2 * i + 1, c3 * n2 + 2 * j + 1] = T[3]
+                if far_ba:
+                    # H = f0 M^T / r: its r-derivative adds -H / r
+                    f = f0 / r
+                    for c3 in range(3):
+                        T = M if c3 == 0 else (Dx if c3 == 1 else Dr)
+                        row = c3 * n2 + 2 * j
+                        A_ba[row, 2 * i] = f * T[0]
+                        A_ba[row, 2 * i + 1] = f * T[2]
+                        A_ba[row + 1, 2 * i] = f * T[1]
+                        A_ba[row + 1, 2 * i + 1] = f * T[3]
+                    g = f / r
+                    row = 2 * n2 + 2 * j
+                    A_ba[row, 2 * i] -= g * M[0]
+                    A_ba[row, 2 * i + 1] -= g * M[2]
+                    A_ba[row + 1, 2 * i] -= g * M[1]
+                    A_ba[row + 1, 2 * i + 1] -= g * M[3]
+
+
+@numba.njit(cache=True, parallel=True)
+def cross_far_taylor(ax, ar, aw, bx, br, near_ab, near_ba, A_ab, A_ba):
+    """First-order expansion, in the positions of the b nodes, of the far node pairs of
+    :func:`cross_influence_matrix` (a fixed, b moving), without b's quadrature weights.
+
+    For wall nodes a_i and membrane nodes b_j (flat index j = Q p + k) with near_ab[i, Q] false,
+    A_ab[2i + α, c 2nb + 2j + β] holds, for c = 0, 1, 2, the ring Stokeslet M_αβ(a_i; b_j) and
+    its derivatives in x_j and r_j; with near_ba[j, P] false (P the a-panel of i),
+    A_ba[c 2nb + 2j + α, 2i + β] holds H_αβ = w_i r_i M_βα(a_i; b_j) / r_j (the entry of the
+    reverse influence matrix, reciprocity) and its derivatives. Near pairs are left at zero
+    (A_ab, A_ba must come zeroed). Moving the b nodes by (Δx_j, Δr_j) changes the far entries
+    of the two influence matrices by the c = 1, 2 blocks times Δx_j, Δr_j, to second order.
+    """
+    n_chunks = min(ax.shape[0], 64)
+    for c in numba.prange(n_chunks):
+        _taylor_panels(c, n_chunks, ax, ar, aw, bx, br, near_ab, near_ba, A_ab, A_ba)
+
+
+@numba.njit(cache=True, nogil=True)
+def cross_far_taylor_serial(ax, ar, aw, bx, br, near_ab, near_ba, A_ab, A_ba):
+    """:func:`cross_far_taylor` on the calling thread."""
+    n_chunks = min(ax.shape[0], 64)
+    for c in range(n_chunks):
+        _taylor_panels(c, n_chunks, ax, ar, aw, bx, br, near_ab, near_ba, A_ab, A_ba)
+
+
+@numba.njit(cache=True, nogil=True)
+def cross_near_panels(pairs_ab, ax, ar, bx, br, bw_, bcx, bcr, pairs_ba, acx, acr, aw,
+                      tn, bw, gx, gw, tol, acc_ab, acc_ba):
+    """Graded integrals of the near pairs of :func:`cross_influence_matrix`: acc_ab[n] the
+    weights of b-panel Q on a-node i for pairs_ab[n] = (i, Q), acc_ba[n] those of a-panel P
+    on b-node j for pairs_ba[n] = (j, P) (the blocks :func:`_store` writes there)."""
+    p = tn.shape[0]
+    for n in range(pairs_ab.shape[0]):
+        i = pairs_ab[n, 0]
+        Q = pairs_ab[n, 1]
+        x0 = ax[i // p, i % p]
+        r0 = ar[i // p, i % p]
+        best = _near_panel(x0, r0, bx, br, bw_, Q, math.inf)[1]
+        _graded_panel(x0, r0, bcx[Q], bcr[Q], tn[best], tn, bw, gx, gw, tol, acc_ab[n])
+    for n in range(pairs_ba.shape[0]):
+        j = pairs_ba[n, 0]
+        P = pairs_ba[n, 1]
+        x0 = bx[j // p, j % p]
+        r0 = br[j // p, j % p]
+        best = _near_panel(x0, r0, ax, ar, aw, P, math.inf)[1]
+        _graded_panel(x0, r0, acx[P], acr[P], tn[best], tn, bw, gx, gw, tol, acc_ba[n])
+
+
+@numba.njit(cache=True, nogil=True)
+def near_product(pairs, acc, p, q, out):
+    """out[2 i + α] += sum_k acc[n, k, (α, β)] q[2 (Q p + k) + β] over pairs[n] = (i, Q)."""
+    for n in range(pairs.shape[0]):
+        i = pairs[n, 0]
+        base = 2 * pairs[n, 1] * p
+        sx = 0.0
+        sr = 0.0
+        for k in range(p):
+            qx = q[base + 2 * k]
+            qr = q[base + 2 * k + 1]
+            sx += acc[n, k, 0] * qx + acc[n, k, 1] * qr
+            sr += acc[n, k, 2] * qx + acc[n, k, 3] * qr
+        out[2 * i] += sx
+        out[2 * i + 1] += sr
+
+
+@numba.njit(cache=True)
+def _self_taylor_rows(c, n_chunks, bx, br, near_dd, A):
+    """The targets i = c, c + n_chunks, ... of :func:`self_far_taylor`."""
+    p = bx.shape[1]
+    nb = bx.size
+    n2 = 2 * nb
+    for i in range(c, nb, n_chunks):
+        x0 = bx[i // p, i % p]
+        r0 = br[i // p, i % p]
+        for j in range(nb):
+            Q = j // p
+            if near_dd[i, Q]:
+                continue
+            x = bx[Q, j - Q * p]
+            r = br[Q, j - Q * p]
+            M, Dx, Dr = _ring_taylor(x0, r0, x, r)
+            h0 = min(TAYLOR_STEP * math.sqrt((x0 - x) ** 2 + (r0 - r) ** 2), 0.5 * r0)
+            Mp = ring_stokeslet(x0, r0 + h0, x, r)
+            Mm = ring_stokeslet(x0, r0 - h0, x, r)
+            i0 = 0.5 / h0
+            Dr0 = ((Mp[0] - Mm[0]) * i0, (Mp[1] - Mm[1]) * i0, (Mp[2] - Mm[2]) * i0,
+                   (Mp[3] - Mm[3]) * i0)
+            for c4 in range(4):
+                T = M if c4 == 0 else (Dx if c4 == 1 else (Dr if c4 == 2 else Dr0))
+                A[2 * i, c4 * n2 + 2 * j] = T[0]
+                A[2 * i, c4 * n2 + 2 * j + 1] = T[1]
+                A[2 * i + 1, c4 * n2 + 2 * j] = T[2]
+                A[2 * i + 1, c4 * n2 + 2 * j + 1] = T[3]
+
+
+@numba.njit(cache=True, parallel=True)
+def self_far_taylor(bx, br, near_dd, A):
+    """First-order expansion, in the node positions, of the far node pairs of the influence
+    matrix of a moving panel set on its own nodes, without the quadrature weights.
+
+    For nodes i, j (flat index j = Q p + k) with near_dd[i, Q] false, A[2i + α, c 2nb + 2j + β]
+    holds, for c = 0, 1, 2, 3, the ring Stokeslet M_αβ(b_i; b_j) and its derivatives in x_j, r_j
+    and r_i (the derivative in x_i is minus that in x_j: the kernel depends on x_i - x_j).
+    Near pairs are left at zero (A must come zeroed).
+    """
+    n_chunks = min(bx.size, 64)
+    for c in numba.prange(n_chunks):
+        _self_taylor_rows(c, n_chunks, bx, br, near_dd, A)
+
+
+@numba.njit(cache=True, nogil=True)
+def self_far_taylor_serial(bx, br, near_dd, A):
+    """:func:`self_far_taylor` on the calling thread."""
+    n_chunks = min(bx.size, 64)
+    for c in range(n_chunks):
+        _self_taylor_rows(c, n_chunks, bx, br, near_dd, A)
+
+
+@numba.njit(cache=True, nogil=True)
+def self_near_panels(pairs, bx, br, bw_, bcx, bcr, fixed, tn, bw, gx, gw, tol, st, sw, sell,
+                     acc):
+    """The near and self blocks of :func:`influence_matrix` of a panel set on its own nodes:
+    acc[n] the weights of panel P on node i for pairs[n] = (i, P), by the fixed self rule
+    where i is a node of P and fixed[P], else by the graded rule."""
+    p = tn.shape[0]
+    for n in range(pairs.shape[0]):
+        i = pairs[n, 0]
+        P = pairs[n, 1]
+        x0 = bx[i // p, i % p]
+        r0 = br[i // p, i % p]
+        if i // p == P and fixed[P]:
+            k0 = i - P * p
+            self_panel_integral(x0, r0, bcx[P], bcr[P], st[k0], sw[k0], sell[k0], acc[n])
+        else:
+            best = _near_panel(x0, r0, bx, br, bw_, P, math.inf)[1]
+            _graded_panel(x0, r0, bcx[P], bcr[P], tn[best], tn, bw, gx, gw, tol, acc[n])

@@ -163,6 +163,25 @@ Solver paths, before → after (each remaining one with its reason):
   evaluation but converge later: (0.7, 1.5) at 64 modes in 17 s instead of 48 in 9 s, (0.61,
   1.39) not converged at 80 modes; M = 3N/2 gains nothing (the same levels, 14.2 s for (0.61,
   1.39)); M = N stays.
+* far field of the Jacobian points: each point assembling its own membrane–membrane and
+  membrane–wall influence matrices → from ``LINEARISED_POINTS`` = 8 points on, their far pairs
+  expanded to first order in the membrane node positions about the state differentiated
+  (:meth:`VesicleOperator.taylor`, once per Jacobian), the near pairs, the self panels and the
+  inlet per point, the wall solves of all the points in one ``lu_solve``. The linearised
+  residual differs from the exact one at second order in the displacement (at 96 modes of
+  (0.6, 1.94): 1.9e-12 … 1.9e-6 for steps 1e-8 … 1e-5), so at the Jacobian's step 1e-7 its
+  columns are within 3.8e-5 (median 5e-8) of exact differences: these cancel the
+  second-order terms of the two residuals of a difference, the linearised points do not
+  (``tests/bem/test_vesicle_linearised.py``). Per point on one thread 101 → 58 ms, a
+  94-point Jacobian on 2 cores 5.25 → 3.5 s (the expansion 0.13 s of it, the joint products
+  0.13 s). Fewer points (the 3 of a directional update) are not worth it: the expansion
+  costs about what 3 points save. Default solves back to back on 2 cores: (0.6, 1.94)
+  58.6–61.4 s, 1442 BIE solves, converged at 96 modes → 48.2–50.0 s, 1372, at 88 modes
+  (another path; estimates 2.3e-5, 0.038, 1.6 → 5.8e-5, 0.032, 4.9 for V/U, Δp⁺, γ_max,
+  each above its true error); (0.61, 1.39) 10.1–10.5 → 9.4–10.0 s, (0.9, 1.0) 1.31–1.34 →
+  1.38 s, the same BIE solves; the six other default cases take the same BIE solves, their
+  outputs move by less than 1e-3 of their estimates and their times by the machine's noise
+  (``default_cases.py``).
 * the valley method's floor test: a fresh difference Jacobian at every stall → the Jacobian
   differenced at this level certifies when the iterate has moved by less than
   :data:`bem.newton.RECENT_STEP` since (:func:`bem.newton.valley_levenberg_marquardt`). At
@@ -283,10 +302,16 @@ from .membrane import bending_force, tension_basis, tension_force, tension_profi
 from .newton import difference_jacobian, levenberg_marquardt, valley_levenberg_marquardt
 from .quadrature import (
     DEFAULT_ORDER,
+    AXIS_CLEARANCE,
+    SELF_RULE_TOL,
+    _serial,
     barycentric_weights,
     gauss_legendre,
+    gauss_table,
     influence,
     influence_pair,
+    near_factor,
+    self_rule,
     serial_assembly,
 )
 from .shape import (
@@ -496,6 +521,115 @@ class VesicleOperator(DropOperator):
         with _LAPACK:                        # the lock also guards the counter (threads)
             self.evaluations += 1
         return u * np.repeat(np.sqrt(drop.w.ravel()), 2)
+
+    def taylor(self, base) -> dict:
+        """The far field of a membrane expanded about its panels ``base`` (a state's
+        ``panels``), for :meth:`linearised_residual` and :meth:`linearised_finish`: the near
+        pairs (membrane on itself, wall and membrane on each other; as :func:`bem.quadrature.
+        influence` classifies them at ``base``) and the far entries with their derivatives in
+        the membrane node positions (:func:`bem.kernels.cross_far_taylor`,
+        :func:`bem.kernels.self_far_taylor`: 5 and 7 ring Stokeslets per far pair, once for
+        all the points)."""
+        from . import kernels
+
+        wall = self.wall
+        nw, nb = wall.n_nodes, base.n_nodes
+        xb, rb = base.x.ravel(), base.r.ravel()
+        near = near_factor(self.p, self.disc.quad_tol)
+        near_ab = np.empty((nw, base.n_panels), dtype=bool)
+        kernels.near_flags(wall.x.ravel(), wall.r.ravel(), base.x, base.r, base.w, near,
+                           near_ab)
+        near_ba = np.empty((nb, wall.n_panels), dtype=bool)
+        kernels.near_flags(xb, rb, wall.x, wall.r, wall.w, near, near_ba)
+        near_dd = np.empty((nb, base.n_panels), dtype=bool)
+        kernels.near_flags(xb, rb, base.x, base.r, base.w, near, near_dd)
+        A_ab = np.zeros((2 * nw, 6 * nb))
+        A_ba = np.zeros((6 * nb, 2 * nw))
+        A_dd = np.zeros((2 * nb, 8 * nb))
+        serial = _serial(nw * nb)
+        (kernels.cross_far_taylor_serial if serial else kernels.cross_far_taylor)(
+            wall.x, wall.r, wall.w, base.x, base.r, near_ab, near_ba, A_ab, A_ba)
+        (kernels.self_far_taylor_serial if serial else kernels.self_far_taylor)(
+            base.x, base.r, near_dd, A_dd)
+        fixed = base.r.min(axis=1) >= AXIS_CLEARANCE * base.lengths
+        if self.disc.quad_tol < SELF_RULE_TOL:
+            fixed[:] = False
+        pairs = {k: np.argwhere(v).astype(np.int64)
+                 for k, v in (("ab", near_ab), ("ba", near_ba), ("dd", near_dd))}
+        return {"base": base, "A_ab": A_ab, "A_ba": A_ba, "A_dd": A_dd, "pairs": pairs,
+                "fixed": fixed}
+
+    def linearised_residual(self, curve: SpectralCurve, g, V: float, taylor: dict) -> dict:
+        r"""The part of :meth:`fixed_residual` that each point needs on its own: the near
+        pairs (membrane on itself, wall and membrane on each other: self and graded
+        quadrature on the moved panels) and the inlet; the far pairs and the wall solve of
+        all the points are left to :meth:`linearised_finish`. Returns the pieces it needs."""
+        from . import kernels
+
+        drop, Q, dp = self._loads(curve, g)
+        tol, p, wall = self.disc.quad_tol, self.p, self.wall
+        q = Q[:, 0]
+        xb, rb = drop.x.ravel(), drop.r.ravel()
+        pairs = taylor["pairs"]
+        acc = {k: np.empty((v.shape[0], p, 4)) for k, v in pairs.items()}
+        tn, _ = gauss_legendre(p)
+        bw = barycentric_weights(p)
+        gx, gw = gauss_table()
+        kernels.cross_near_panels(pairs["ab"], wall.x, wall.r, drop.x, drop.r, drop.w,
+                                  drop.cx, drop.cr, pairs["ba"], wall.cx, wall.cr, wall.w,
+                                  tn, bw, gx, gw, tol, acc["ab"], acc["ba"])
+        kernels.self_near_panels(pairs["dd"], drop.x, drop.r, drop.w, drop.cx, drop.cr,
+                                 taylor["fixed"], tn, bw, gx, gw, tol, *self_rule(p),
+                                 acc["dd"])
+        inl = influence(xb, rb, self.inlet, tol=tol)
+        u = inl[:, 0::2].sum(axis=1) * dp[0]
+        kernels.near_product(pairs["dd"], acc["dd"], p, q, u)
+        u /= _EIGHT_PI
+        u[0::2] += poiseuille(rb) - V
+        wall_near = np.zeros(2 * wall.n_nodes)
+        kernels.near_product(pairs["ab"], acc["ab"], p, q, wall_near)
+        base = taylor["base"]
+        return {"u": u, "v": np.repeat(drop.w.ravel(), 2) * q, "dp": float(dp[0]),
+                "dx": np.repeat(xb - base.x.ravel(), 2), "dr": np.repeat(rb - base.r.ravel(), 2),
+                "wall_near": wall_near, "acc_ba": acc["ba"],
+                "sw": np.repeat(np.sqrt(drop.w.ravel()), 2)}
+
+    def linearised_finish(self, taylor: dict, parts: list) -> list:
+        r"""Weighted residuals of the points of :meth:`linearised_residual` (None where a
+        point is None): the far entries of each moved membrane are those of ``taylor`` plus
+        their derivatives times the node displacements (exact to second order in the
+        displacements; for a difference Jacobian, steps ~1e-7, far below the difference
+        quotient's own truncation), all points in a few products and one wall solve."""
+        from . import kernels
+
+        ok = [k for k, pt in enumerate(parts) if pt is not None]
+        out = [None] * len(parts)
+        if not ok:
+            return out
+        pts = [parts[k] for k in ok]
+        V = np.column_stack([pt["v"] for pt in pts])
+        DX = np.column_stack([pt["dx"] for pt in pts])
+        DR = np.column_stack([pt["dr"] for pt in pts])
+        n2 = V.shape[0]
+        X = np.vstack([V, DX * V, DR * V])
+        rhs = taylor["A_ab"] @ X
+        rhs += np.column_stack([pt["wall_near"] for pt in pts])
+        rhs /= _EIGHT_PI
+        rhs += np.outer(self.col_dp_wall, [pt["dp"] for pt in pts])
+        with _LAPACK:
+            qw = -sla.lu_solve(self.lu_wall, rhs, check_finite=False)
+            self.evaluations += len(pts)
+        Y = taylor["A_ba"] @ qw
+        U = Y[:n2] + DX * Y[n2:2 * n2] + DR * Y[2 * n2:]
+        A = taylor["A_dd"]
+        U += A[:, :3 * n2] @ X - DX * (A[:, n2:2 * n2] @ V) + DR * (A[:, 3 * n2:] @ V)
+        U /= _EIGHT_PI
+        pba, p = taylor["pairs"]["ba"], self.p
+        for c, (k, pt) in enumerate(zip(ok, pts)):
+            u = np.zeros(n2)
+            kernels.near_product(pba, pt["acc_ba"], p, qw[:, c], u)
+            out[k] = (pt["u"] + U[:, c] + u / _EIGHT_PI) * pt["sw"]
+        return out
 
 
 def _range_projector(M: np.ndarray):
@@ -736,34 +870,50 @@ def _workers() -> int:
     return max(1, int(numba.get_num_threads()))
 
 
+#: fixed-load points evaluated together from this many on (a difference Jacobian, not the
+#: few points of a directional update) share the far field of the membrane expanded about the
+#: state differentiated (:meth:`VesicleOperator.taylor`: 5 or 7 ring Stokeslets per far pair
+#: once, against one per far pair and point)
+LINEARISED_POINTS = 8
+
+
 def _residuals(op: VesicleOperator, modes_list, fixed=None) -> list:
     """Weighted residuals F of the shapes ``modes_list`` (None where the operator rejects one),
     evaluated ``_workers()`` at a time, each on one thread (serial assembly; the products and
-    kernels release the GIL); with ``fixed`` = (g, V), the residuals at those fixed tension
-    coefficients and speed (:meth:`VesicleOperator.fixed_residual`). Every shape starts its
-    area secant from the same slope, so the result does not depend on the number of threads
-    or on the order. Measured at (0.6, 1.94), 96 modes, on 2 cores: 0.08 s per evaluation
-    against 0.12 s one after the other."""
+    kernels release the GIL); with ``fixed`` = (g, V, panels) of a state, the residuals at
+    those fixed tension coefficients and speed (:meth:`VesicleOperator.fixed_residual`), from
+    LINEARISED_POINTS points on with the wall–membrane far field expanded about the state's
+    panels (:meth:`VesicleOperator.linearised_finish`). Every shape starts its area secant
+    from the same slope, so the result does not depend on the number of threads or on the
+    order. Measured at (0.6, 1.94), 96 modes, on 2 cores: 0.08 s per evaluation against
+    0.12 s one after the other."""
     slope = op._area_slope
+    taylor = None
+    if fixed is not None and len(modes_list) >= LINEARISED_POINTS:
+        taylor = op.taylor(fixed[2])
 
     def one(modes, serial=True):
         with serial_assembly() if serial else nullcontext(), single_threaded_blas():
             try:
                 curve = op.curve(modes, slope=slope)
+                if taylor is not None:
+                    return op.linearised_residual(curve, fixed[0], fixed[1], taylor)
                 if fixed is not None:
-                    return op.fixed_residual(curve, *fixed)
+                    return op.fixed_residual(curve, *fixed[:2])
                 return op.evaluate(curve)["F"]
             except InvalidParameterError:
                 return None
 
     workers = min(_workers(), len(modes_list))
     if workers <= 1:
-        return [one(m, serial=False) for m in modes_list]
-    pool = ThreadPoolExecutor(workers)
-    try:
-        return list(pool.map(one, modes_list))
-    finally:                       # on Ctrl-C: drop the queued shapes, finish the running ones
-        pool.shutdown(wait=True, cancel_futures=True)
+        out = [one(m, serial=False) for m in modes_list]
+    else:
+        pool = ThreadPoolExecutor(workers)
+        try:
+            out = list(pool.map(one, modes_list))
+        finally:                   # on Ctrl-C: drop the queued shapes, finish the running ones
+            pool.shutdown(wait=True, cancel_futures=True)
+    return out if taylor is None else op.linearised_finish(taylor, out)
 
 
 def level_function(op: VesicleOperator, template):
@@ -780,7 +930,7 @@ def level_function(op: VesicleOperator, template):
         return _residuals(op, [op.full(z, template) for z in points], at)
 
     def fixed(state):
-        at = (state["g"], state["V"])
+        at = (state["g"], state["V"], state["panels"])
         return (lambda points: many(points, at)), _range_projector(state["M"])
 
     fun.many, fun.fixed = many, fixed

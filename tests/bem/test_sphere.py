@@ -105,13 +105,15 @@ def test_null_multiplier_and_residual_are_small(report):
 def test_answer_is_insensitive_to_the_wall_length():
     """Default half-length lam + 7.8 R; extending it to lam + 11 R changes nothing.
 
-    drag_K of this near-contact sphere (K ~ 469) carries ~1e-12 of rounding: with the kernels
-    of revision 0e10f54 a wall 1e-6 R longer already moved it by 1.1e-12, and rounding-level
-    changes of the kernels move the difference below between 1.3e-13 and 1.3e-12; so drag_K is
-    held to 3e-12, V/U and dp+ (1e-14 apart) to 1e-12."""
+    drag_K of this near-contact sphere (K ~ 469) carries a rounding floor of a few 1e-12 that
+    depends on the machine: on an Intel Xeon its change against the lam + 11 R wall is
+    2.1e-12 to 4.4e-12 for every half-length from lam + 6 R up (a wall 1e-6 R longer: 4.4e-12),
+    on an AMD EPYC 1.3e-13 to 1.3e-12. A wall that is too short stands far above it: lam + 4 R
+    moves drag_K by 3.9e-10, lam + 3 R by 9.1e-9. So drag_K is held to 1e-11, V/U and dp+
+    (1e-14 apart at the default; 2.7e-10 at lam + 4 R) to 1e-12."""
     a = solve_sphere_mesh(0.9, 8)
     b = solve_sphere_mesh(0.9, 8, half_length=0.9 + 11.0)
-    for k, bound in (("V_over_U", 1e-12), ("dp_plus_R", 1e-12), ("drag_K", 3e-12)):
+    for k, bound in (("V_over_U", 1e-12), ("dp_plus_R", 1e-12), ("drag_K", 1e-11)):
         assert abs(a[k] / b[k] - 1) < bound, k
 
 
