@@ -701,26 +701,14 @@ def cross_far_taylor_serial(ax, ar, aw, bx, br, near_ab, near_ba, A_ab, A_ba):
 
 
 @numba.njit(cache=True, nogil=True)
-def cross_near_panels(pairs_ab, ax, ar, bx, br, bw_, bcx, bcr, pairs_ba, acx, acr, aw,
-                      tn, bw, gx, gw, tol, acc_ab, acc_ba):
-    """Graded integrals of the near pairs of :func:`cross_influence_matrix`: acc_ab[n] the
-    weights of b-panel Q on a-node i for pairs_ab[n] = (i, Q), acc_ba[n] those of a-panel P
-    on b-node j for pairs_ba[n] = (j, P) (the blocks :func:`_store` writes there)."""
-    p = tn.shape[0]
-    for n in range(pairs_ab.shape[0]):
-        i = pairs_ab[n, 0]
-        Q = pairs_ab[n, 1]
-        x0 = ax[i // p, i % p]
-        r0 = ar[i // p, i % p]
-        best = _near_panel(x0, r0, bx, br, bw_, Q, math.inf)[1]
-        _graded_panel(x0, r0, bcx[Q], bcr[Q], tn[best], tn, bw, gx, gw, tol, acc_ab[n])
-    for n in range(pairs_ba.shape[0]):
-        j = pairs_ba[n, 0]
-        P = pairs_ba[n, 1]
-        x0 = bx[j // p, j % p]
-        r0 = br[j // p, j % p]
-        best = _near_panel(x0, r0, ax, ar, aw, P, math.inf)[1]
-        _graded_panel(x0, r0, acx[P], acr[P], tn[best], tn, bw, gx, gw, tol, acc_ba[n])
+def near_panels(pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol, acc):
+    """Graded integrals of the near pairs of an influence matrix: acc[n] the weights of panel
+    P on target (tx[i], tr[i]) for pairs[n] = (i, P) (the block :func:`_store` writes there)."""
+    for n in range(pairs.shape[0]):
+        i = pairs[n, 0]
+        P = pairs[n, 1]
+        best = _near_panel(tx[i], tr[i], px, pr, pw, P, math.inf)[1]
+        _graded_panel(tx[i], tr[i], pcx[P], pcr[P], tn[best], tn, bw, gx, gw, tol, acc[n])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -811,3 +799,35 @@ def self_near_panels(pairs, bx, br, bw_, bcx, bcr, fixed, tn, bw, gx, gw, tol, s
         else:
             best = _near_panel(x0, r0, bx, br, bw_, P, math.inf)[1]
             _graded_panel(x0, r0, bcx[P], bcr[P], tn[best], tn, bw, gx, gw, tol, acc[n])
+
+
+@numba.njit(cache=True)
+def near_target_taylor(pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol, acc, dx, dr):
+    """Graded integrals of fixed panels on moving targets and their derivatives in the target
+    position: for pairs[n] = (j, P), acc[n] the weights of panel P on target (tx[j], tr[j]) (as
+    :func:`near_panels`), dx[n] and dr[n] their derivatives in tx[j] and tr[j] by central
+    differences of step TAYLOR_STEP times the distance to P's nearest node (r - step stays
+    >= r/2), each integral with the Gauss–Newton search started from that node."""
+    p = tn.shape[0]
+    plus = np.empty((p, 4))
+    minus = np.empty((p, 4))
+    for n in range(pairs.shape[0]):
+        j = pairs[n, 0]
+        P = pairs[n, 1]
+        x0 = tx[j]
+        r0 = tr[j]
+        best = _near_panel(x0, r0, px, pr, pw, P, math.inf)[1]
+        t0 = tn[best]
+        h = TAYLOR_STEP * math.sqrt((px[P, best] - x0) ** 2 + (pr[P, best] - r0) ** 2)
+        hr = min(h, 0.5 * r0)
+        _graded_panel(x0, r0, pcx[P], pcr[P], t0, tn, bw, gx, gw, tol, acc[n])
+        _graded_panel(x0 + h, r0, pcx[P], pcr[P], t0, tn, bw, gx, gw, tol, plus)
+        _graded_panel(x0 - h, r0, pcx[P], pcr[P], t0, tn, bw, gx, gw, tol, minus)
+        for k in range(p):
+            for c in range(4):
+                dx[n, k, c] = (plus[k, c] - minus[k, c]) * (0.5 / h)
+        _graded_panel(x0, r0 + hr, pcx[P], pcr[P], t0, tn, bw, gx, gw, tol, plus)
+        _graded_panel(x0, r0 - hr, pcx[P], pcr[P], t0, tn, bw, gx, gw, tol, minus)
+        for k in range(p):
+            for c in range(4):
+                dr[n, k, c] = (plus[k, c] - minus[k, c]) * (0.5 / hr)

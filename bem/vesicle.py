@@ -165,23 +165,28 @@ Solver paths, before → after (each remaining one with its reason):
   1.39)); M = N stays.
 * far field of the Jacobian points: each point assembling its own membrane–membrane and
   membrane–wall influence matrices → from ``LINEARISED_POINTS`` = 8 points on, their far pairs
-  expanded to first order in the membrane node positions about the state differentiated
-  (:meth:`VesicleOperator.taylor`, once per Jacobian), the near pairs, the self panels and the
-  inlet per point, the wall solves of all the points in one ``lu_solve``. The linearised
-  residual differs from the exact one at second order in the displacement (at 96 modes of
-  (0.6, 1.94): 1.9e-12 … 1.9e-6 for steps 1e-8 … 1e-5), so at the Jacobian's step 1e-7 its
-  columns are within 3.8e-5 (median 5e-8) of exact differences: these cancel the
-  second-order terms of the two residuals of a difference, the linearised points do not
-  (``tests/bem/test_vesicle_linearised.py``). Per point on one thread 101 → 58 ms, a
-  94-point Jacobian on 2 cores 5.25 → 3.5 s (the expansion 0.13 s of it, the joint products
-  0.13 s). Fewer points (the 3 of a directional update) are not worth it: the expansion
-  costs about what 3 points save. Default solves back to back on 2 cores: (0.6, 1.94)
-  58.6–61.4 s, 1442 BIE solves, converged at 96 modes → 48.2–50.0 s, 1372, at 88 modes
-  (another path; estimates 2.3e-5, 0.038, 1.6 → 5.8e-5, 0.032, 4.9 for V/U, Δp⁺, γ_max,
-  each above its true error); (0.61, 1.39) 10.1–10.5 → 9.4–10.0 s, (0.9, 1.0) 1.31–1.34 →
-  1.38 s, the same BIE solves; the six other default cases take the same BIE solves, their
-  outputs move by less than 1e-3 of their estimates and their times by the machine's noise
-  (``default_cases.py``).
+  and the wall's near panels on the membrane nodes expanded to first order in the membrane
+  node positions about the state differentiated (:meth:`VesicleOperator.taylor`, once per
+  Jacobian), the membrane's near and self panels and the inlet per point, the wall solves of
+  all the points in one ``lu_solve``. The linearised residual differs from the exact one at
+  second order in the displacement (at 96 modes of (0.6, 1.94): 1.9e-12 … 1.9e-6 for steps
+  1e-8 … 1e-5), so at the Jacobian's step 1e-7 its columns are within 1.8e-5 of the largest
+  column of exact differences (88-mode seed of (0.6, 1.94); median 5e-8 of a column's own
+  norm): these cancel the second-order terms of the two residuals of a difference, the
+  linearised points do not (``tests/bem/test_vesicle_linearised.py``). At that seed, per
+  point on one thread (Intel Xeon): 95 → 41 ms (the membrane's near panels on the wall 20 ms,
+  on itself 16, the loads 6); the expansion 0.16 s per Jacobian. Fewer points (the 3 of a
+  directional update) are not worth it: the expansion costs about what 3 points save.
+  Default solves on 2 cores, back to back (the machine's speed drifts by 30 % over an hour,
+  so each comparison is within one run of pairs): (0.6, 1.94) with exact points 58.6–61.4 s
+  (1442 BIE solves, converged at 96 modes), with the far pairs linearised 48.2–50.0 s (1372,
+  88 modes); later, the machine slower, the far pairs linearised 63–71 s (1372, 88 modes),
+  the wall's near panels too 72–77 s (1485, 96 modes: the rounding of the columns changed the
+  carriers' path; estimates 5.8e-5, 0.032, 4.9 → 2.1e-5, 0.029, 1.6 for V/U, Δp⁺, γ_max);
+  (0.61, 1.39), the same 448 BIE solves each way: 10.1–10.5 s exact, 9.4–10.0 s far pairs; later
+  13.4–15.7 s far pairs, 12.4–12.9 s near panels too. The six other default cases take the
+  same BIE solves as with exact points, their outputs move by less than 1e-3 of their
+  estimates and their times by the machine's noise (``default_cases.py``).
 * the valley method's floor test: a fresh difference Jacobian at every stall → the Jacobian
   differenced at this level certifies when the iterate has moved by less than
   :data:`bem.newton.RECENT_STEP` since (:func:`bem.newton.valley_levenberg_marquardt`). At
@@ -526,10 +531,12 @@ class VesicleOperator(DropOperator):
         """The far field of a membrane expanded about its panels ``base`` (a state's
         ``panels``), for :meth:`linearised_residual` and :meth:`linearised_finish`: the near
         pairs (membrane on itself, wall and membrane on each other; as :func:`bem.quadrature.
-        influence` classifies them at ``base``) and the far entries with their derivatives in
+        influence` classifies them at ``base``), the far entries with their derivatives in
         the membrane node positions (:func:`bem.kernels.cross_far_taylor`,
-        :func:`bem.kernels.self_far_taylor`: 5 and 7 ring Stokeslets per far pair, once for
-        all the points)."""
+        :func:`bem.kernels.self_far_taylor`: 5 and 7 ring Stokeslets per far pair) and the
+        wall's near panels on the membrane nodes with their derivatives in those nodes
+        (:func:`bem.kernels.near_target_taylor`: 5 graded integrals per pair), once for all
+        the points."""
         from . import kernels
 
         wall = self.wall
@@ -556,14 +563,22 @@ class VesicleOperator(DropOperator):
             fixed[:] = False
         pairs = {k: np.argwhere(v).astype(np.int64)
                  for k, v in (("ab", near_ab), ("ba", near_ba), ("dd", near_dd))}
+        n_ba, p = pairs["ba"].shape[0], self.p
+        acc_ba = [np.empty((n_ba, p, 4)) for _ in range(3)]
+        tn, _ = gauss_legendre(p)
+        gx, gw = gauss_table()
+        kernels.near_target_taylor(pairs["ba"], xb, rb, wall.x, wall.r, wall.w, wall.cx,
+                                   wall.cr, tn, barycentric_weights(p), gx, gw,
+                                   self.disc.quad_tol, *acc_ba)
         return {"base": base, "A_ab": A_ab, "A_ba": A_ba, "A_dd": A_dd, "pairs": pairs,
-                "fixed": fixed}
+                "fixed": fixed, "acc_ba": acc_ba}
 
     def linearised_residual(self, curve: SpectralCurve, g, V: float, taylor: dict) -> dict:
-        r"""The part of :meth:`fixed_residual` that each point needs on its own: the near
-        pairs (membrane on itself, wall and membrane on each other: self and graded
-        quadrature on the moved panels) and the inlet; the far pairs and the wall solve of
-        all the points are left to :meth:`linearised_finish`. Returns the pieces it needs."""
+        r"""The part of :meth:`fixed_residual` that each point needs on its own: the loads,
+        the membrane's near panels (on the wall nodes and on its own nodes: graded and self
+        quadrature on the moved panels) and the inlet; the far pairs, the wall's near panels
+        and the wall solve of all the points are left to :meth:`linearised_finish`. Returns
+        the pieces it needs."""
         from . import kernels
 
         drop, Q, dp = self._loads(curve, g)
@@ -571,13 +586,12 @@ class VesicleOperator(DropOperator):
         q = Q[:, 0]
         xb, rb = drop.x.ravel(), drop.r.ravel()
         pairs = taylor["pairs"]
-        acc = {k: np.empty((v.shape[0], p, 4)) for k, v in pairs.items()}
+        acc = {k: np.empty((pairs[k].shape[0], p, 4)) for k in ("ab", "dd")}
         tn, _ = gauss_legendre(p)
         bw = barycentric_weights(p)
         gx, gw = gauss_table()
-        kernels.cross_near_panels(pairs["ab"], wall.x, wall.r, drop.x, drop.r, drop.w,
-                                  drop.cx, drop.cr, pairs["ba"], wall.cx, wall.cr, wall.w,
-                                  tn, bw, gx, gw, tol, acc["ab"], acc["ba"])
+        kernels.near_panels(pairs["ab"], wall.x.ravel(), wall.r.ravel(), drop.x, drop.r,
+                            drop.w, drop.cx, drop.cr, tn, bw, gx, gw, tol, acc["ab"])
         kernels.self_near_panels(pairs["dd"], drop.x, drop.r, drop.w, drop.cx, drop.cr,
                                  taylor["fixed"], tn, bw, gx, gw, tol, *self_rule(p),
                                  acc["dd"])
@@ -591,8 +605,7 @@ class VesicleOperator(DropOperator):
         base = taylor["base"]
         return {"u": u, "v": np.repeat(drop.w.ravel(), 2) * q, "dp": float(dp[0]),
                 "dx": np.repeat(xb - base.x.ravel(), 2), "dr": np.repeat(rb - base.r.ravel(), 2),
-                "wall_near": wall_near, "acc_ba": acc["ba"],
-                "sw": np.repeat(np.sqrt(drop.w.ravel()), 2)}
+                "wall_near": wall_near, "sw": np.repeat(np.sqrt(drop.w.ravel()), 2)}
 
     def linearised_finish(self, taylor: dict, parts: list) -> list:
         r"""Weighted residuals of the points of :meth:`linearised_residual` (None where a
@@ -626,8 +639,10 @@ class VesicleOperator(DropOperator):
         U /= _EIGHT_PI
         pba, p = taylor["pairs"]["ba"], self.p
         for c, (k, pt) in enumerate(zip(ok, pts)):
-            u = np.zeros(n2)
-            kernels.near_product(pba, pt["acc_ba"], p, qw[:, c], u)
+            u = [np.zeros(n2) for _ in range(3)]
+            for acc, uc in zip(taylor["acc_ba"], u):
+                kernels.near_product(pba, acc, p, qw[:, c], uc)
+            u = u[0] + DX[:, c] * u[1] + DR[:, c] * u[2]
             out[k] = (pt["u"] + U[:, c] + u / _EIGHT_PI) * pt["sw"]
         return out
 
