@@ -589,11 +589,11 @@ def cross_influence_matrix_serial(ax, ar, aw, acx, acr, bx, br, bw_, bcx, bcr, t
 
 
 # --------------------------------------------------------------------------------------------
-# Linearised cross interaction: a moving panel set (membrane) and a fixed one (wall)
+# Linearisation in the node positions of a moving panel set (membrane) beside a fixed one (wall)
 # --------------------------------------------------------------------------------------------
-#: relative step (to the source-field distance) of the central differences of the ring
-#: Stokeslet in :func:`cross_far_taylor`: truncation ~ STEP^2/6 and rounding ~ 1e-16/STEP of
-#: the kernel's scale, both ~1e-11 at 1e-5
+#: relative step (to the source-target distance) of the central differences of the ring
+#: Stokeslet (:func:`_ring_taylor`) and of the near-panel integrals (:func:`near_target_taylor`):
+#: truncation ~ STEP^2/6 and rounding ~ 1e-16/STEP of the kernel's scale, both ~1e-11 at 1e-5
 TAYLOR_STEP = 1e-5
 
 
