@@ -609,8 +609,8 @@ class VesicleOperator(DropOperator):
 
     def linearised_finish(self, taylor: dict, parts: list) -> list:
         r"""Weighted residuals of the points of :meth:`linearised_residual` (None where a
-        point is None): the far entries of each moved membrane are those of ``taylor`` plus
-        their derivatives times the node displacements (exact to second order in the
+        point is None): the far entries and the wall's near panels of each moved membrane are
+        those of ``taylor`` plus their derivatives times the node displacements (exact to second order in the
         displacements; for a difference Jacobian, steps ~1e-7, far below the difference
         quotient's own truncation), all points in a few products and one wall solve."""
         from . import kernels
