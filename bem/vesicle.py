@@ -610,9 +610,9 @@ class VesicleOperator(DropOperator):
     def linearised_finish(self, taylor: dict, parts: list) -> list:
         r"""Weighted residuals of the points of :meth:`linearised_residual` (None where a
         point is None): the far entries and the wall's near panels of each moved membrane are
-        those of ``taylor`` plus their derivatives times the node displacements (exact to second order in the
-        displacements; for a difference Jacobian, steps ~1e-7, far below the difference
-        quotient's own truncation), all points in a few products and one wall solve."""
+        those of ``taylor`` plus their derivatives times the node displacements (exact to
+        second order in the displacements; for a difference Jacobian, steps ~1e-7), all
+        points in a few products and one wall solve."""
         from . import kernels
 
         ok = [k for k, pt in enumerate(parts) if pt is not None]
