@@ -607,6 +607,14 @@ def near_flags(tx, tr, px, pr, pw, near, out):
 
 
 @numba.njit(cache=True)
+def _central(plus, minus, h):
+    """Central difference (plus - minus) / 2h of two ring-Stokeslet 4-tuples."""
+    s = 0.5 / h
+    return ((plus[0] - minus[0]) * s, (plus[1] - minus[1]) * s, (plus[2] - minus[2]) * s,
+            (plus[3] - minus[3]) * s)
+
+
+@numba.njit(cache=True)
 def _ring_taylor(x0, r0, x, r):
     """Ring Stokeslet M(x0, r0; x, r) and its derivatives in the source position (x, r), by
     central differences of step TAYLOR_STEP times the distance (r - step stays >= r/2):
@@ -615,16 +623,8 @@ def _ring_taylor(x0, r0, x, r):
     h = TAYLOR_STEP * d
     hr = min(h, 0.5 * r)
     M = ring_stokeslet(x0, r0, x, r)
-    xp = ring_stokeslet(x0, r0, x + h, r)
-    xm = ring_stokeslet(x0, r0, x - h, r)
-    rp = ring_stokeslet(x0, r0, x, r + hr)
-    rm = ring_stokeslet(x0, r0, x, r - hr)
-    ix = 0.5 / h
-    ir = 0.5 / hr
-    Dx = ((xp[0] - xm[0]) * ix, (xp[1] - xm[1]) * ix, (xp[2] - xm[2]) * ix,
-          (xp[3] - xm[3]) * ix)
-    Dr = ((rp[0] - rm[0]) * ir, (rp[1] - rm[1]) * ir, (rp[2] - rm[2]) * ir,
-          (rp[3] - rm[3]) * ir)
+    Dx = _central(ring_stokeslet(x0, r0, x + h, r), ring_stokeslet(x0, r0, x - h, r), h)
+    Dr = _central(ring_stokeslet(x0, r0, x, r + hr), ring_stokeslet(x0, r0, x, r - hr), hr)
     return M, Dx, Dr
 
 
@@ -745,11 +745,8 @@ def _self_taylor_rows(c, n_chunks, bx, br, near_dd, A):
             r = br[Q, j - Q * p]
             M, Dx, Dr = _ring_taylor(x0, r0, x, r)
             h0 = min(TAYLOR_STEP * math.sqrt((x0 - x) ** 2 + (r0 - r) ** 2), 0.5 * r0)
-            Mp = ring_stokeslet(x0, r0 + h0, x, r)
-            Mm = ring_stokeslet(x0, r0 - h0, x, r)
-            i0 = 0.5 / h0
-            Dr0 = ((Mp[0] - Mm[0]) * i0, (Mp[1] - Mm[1]) * i0, (Mp[2] - Mm[2]) * i0,
-                   (Mp[3] - Mm[3]) * i0)
+            Dr0 = _central(ring_stokeslet(x0, r0 + h0, x, r),
+                           ring_stokeslet(x0, r0 - h0, x, r), h0)
             for c4 in range(4):
                 T = M if c4 == 0 else (Dx if c4 == 1 else (Dr if c4 == 2 else Dr0))
                 A[2 * i, c4 * n2 + 2 * j] = T[0]

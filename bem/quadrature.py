@@ -52,6 +52,7 @@ __all__ = [
     "near_factor",
     "panels_on_curve",
     "self_rule",
+    "self_rule_panels",
 ]
 
 DEFAULT_ORDER = 16   # Gauss nodes per panel
@@ -291,6 +292,16 @@ def near_factor(p: int, tol: float = DEFAULT_TOL) -> float:
     return max(1.0, float(tol) ** (-1.0 / (2.0 * int(p))) / 4.0)
 
 
+def self_rule_panels(panels: PanelSet, tol: float) -> np.ndarray:
+    """Mask of the panels whose nodes take the fixed self rule (:func:`self_rule`) on
+    themselves: those at least AXIS_CLEARANCE lengths off the axis, when tol >= SELF_RULE_TOL
+    (the graded rule elsewhere)."""
+    fixed = panels.r.min(axis=1) >= AXIS_CLEARANCE * panels.lengths
+    if tol < SELF_RULE_TOL:
+        fixed[:] = False
+    return fixed
+
+
 def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NEAR_FACTOR,
               tol: float = DEFAULT_TOL) -> np.ndarray:
     r"""Matrix A with :math:`u_\alpha(i) = (8\pi\eta)^{-1}\sum_j A_{2i+\alpha, 2j+\beta} q_\beta(j)`.
@@ -313,9 +324,7 @@ def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NE
     if (tx.size >= n and np.array_equal(tx[:n], panels.x.ravel())
             and np.array_equal(tr[:n], panels.r.ravel())):
         self_node[:n] = np.arange(n)
-    fixed = panels.r.min(axis=1) >= AXIS_CLEARANCE * panels.lengths
-    if as_tol < SELF_RULE_TOL:
-        fixed[:] = False
+    fixed = self_rule_panels(panels, as_tol)
     st, sw, sell = self_rule(p)
     out = np.empty((2 * tx.size, 2 * n))
     kernel = (kernels.influence_matrix_serial if _serial(tx.size * n)

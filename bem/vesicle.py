@@ -307,8 +307,6 @@ from .membrane import bending_force, tension_basis, tension_force, tension_profi
 from .newton import difference_jacobian, levenberg_marquardt, valley_levenberg_marquardt
 from .quadrature import (
     DEFAULT_ORDER,
-    AXIS_CLEARANCE,
-    SELF_RULE_TOL,
     _serial,
     barycentric_weights,
     gauss_legendre,
@@ -317,6 +315,7 @@ from .quadrature import (
     influence_pair,
     near_factor,
     self_rule,
+    self_rule_panels,
     serial_assembly,
 )
 from .shape import (
@@ -558,9 +557,7 @@ class VesicleOperator(DropOperator):
             wall.x, wall.r, wall.w, base.x, base.r, near_ab, near_ba, A_ab, A_ba)
         (kernels.self_far_taylor_serial if serial else kernels.self_far_taylor)(
             base.x, base.r, near_dd, A_dd)
-        fixed = base.r.min(axis=1) >= AXIS_CLEARANCE * base.lengths
-        if self.disc.quad_tol < SELF_RULE_TOL:
-            fixed[:] = False
+        fixed = self_rule_panels(base, self.disc.quad_tol)
         pairs = {k: np.argwhere(v).astype(np.int64)
                  for k, v in (("ab", near_ab), ("ba", near_ba), ("dd", near_dd))}
         n_ba, p = pairs["ba"].shape[0], self.p
