@@ -683,9 +683,10 @@ def cross_far_taylor(ax, ar, aw, bx, br, near_ab, near_ba, A_ab, A_ba):
     A_ab[2i + α, c 2nb + 2j + β] holds, for c = 0, 1, 2, the ring Stokeslet M_αβ(a_i; b_j) and
     its derivatives in x_j and r_j; with near_ba[j, P] false (P the a-panel of i),
     A_ba[c 2nb + 2j + α, 2i + β] holds H_αβ = w_i r_i M_βα(a_i; b_j) / r_j (the entry of the
-    reverse influence matrix, reciprocity) and its derivatives. Near pairs are left at zero
-    (A_ab, A_ba must come zeroed). Moving the b nodes by (Δx_j, Δr_j) changes the far entries
-    of the two influence matrices by the c = 1, 2 blocks times Δx_j, Δr_j, to second order.
+    reverse influence matrix, reciprocity, Pozrikidis 1992) and its derivatives. Near pairs are
+    left at zero (A_ab, A_ba must come zeroed). Moving the b nodes by (Δx_j, Δr_j) changes the
+    far entries of the two influence matrices by the c = 1, 2 blocks times Δx_j, Δr_j, to
+    second order.
     """
     n_chunks = min(ax.shape[0], 64)
     for c in numba.prange(n_chunks):
