@@ -4,15 +4,18 @@ Run with ``python tests/benchmarks/profile_vesicle.py [--case NU LAM] [--modes 1
 
 (a) One default :func:`bem.vesicle.solve_vesicle` per ``--case`` (default (0.9, 1.0)) with
 timers wrapped around the pieces of :class:`bem.vesicle.VesicleOperator` and of the
-Levenberg–Marquardt driver (:mod:`bem.newton`): influence-matrix assembly (membrane sources on
-membrane and wall targets, wall sources, inlet), wall LU back-substitution, tension/V least
+Levenberg–Marquardt driver (:mod:`bem.newton`): influence-matrix assembly (membrane on itself,
+membrane and wall on each other, wall sources, inlet), wall LU back-substitution, tension/V least
 squares, curve construction (closed curve and area secant), membrane panels (curve sampling),
-bending and tension forces, the dense products of the operator, Newton linear algebra, level
-set-up, seed and outputs. Times are *exclusive* (a timer's time minus that of the timers called
-inside it), so the rows add up to the wall time; "unaccounted" is the rest (driver code). The
-evaluations are split by what asked for them (difference-Jacobian columns, directional Jacobian
-updates, damped LM trial steps, other: initial point and extrapolation) per level. The
-SpectralCurve rows below the table are inclusive and count every caller.
+bending and tension forces, the dense products of the operator, the fixed-load points of
+directional updates, the linearised points of difference Jacobians (each point's membrane near
+panels and inlet; once per Jacobian the far-field expansion and the products and wall solve of
+all its points), Newton linear algebra, level set-up, seed and outputs. Times are *exclusive*
+(a timer's time minus that of the timers called inside it), so the rows add up to the wall
+time; "unaccounted" is the rest (driver code). The evaluations are split by what asked for
+them (difference-Jacobian columns, prolonged Jacobians' new columns included; directional
+Jacobian updates; damped LM trial steps; other: initial point and extrapolation) per level.
+The SpectralCurve rows below the table are inclusive and count every caller.
 
 (b) The cost of ONE evaluation (``VesicleOperator.evaluate`` of a fixed shape: the lubrication
 shape at ``--scaling-case`` (default (0.9, 1.0)), Ca_B = 50, fitted with N modes) and of one
@@ -50,11 +53,16 @@ _PHASES = {"Newton: difference Jacobian": "Jacobian columns",
            "Newton: damped LM step": "LM trial steps"}
 
 #: row order of the exclusive-time table
-_ORDER = ["assembly: membrane sources (membrane + wall targets)", "assembly: wall sources",
+_ORDER = ["assembly: membrane on itself", "assembly: membrane and wall on each other",
+          "assembly: wall sources",
           "assembly: inlet", "wall LU back-substitution", "tension/V least squares (lstsq)",
           "curve construction (closed curve, area secant)", "membrane panels (curve sampling)",
           "bending force", "tension basis", "operator products (A@Q, B@qw, ...)",
-          "evaluate: rest", "Newton: difference Jacobian", "Newton: directional update",
+          "evaluate: rest", "fixed-load point: rest",
+          "linearised point: membrane near panels, inlet",
+          "linearised Jacobian: far-field expansion",
+          "linearised Jacobian: far products, wall solve", "Newton: difference Jacobian",
+          "Newton: directional update",
           "Newton: damped LM step", "Newton: Gauss-Newton promise",
           "level set-up (wall matrix + LU, breaks, area mode)", "seed (lubrication solve + fit)",
           "shape fits (fit_curve)", "outputs (_outputs, profile, wall shear)"]
@@ -173,19 +181,26 @@ def install(prof: Profiler) -> None:
             return "assembly: wall sources"
         if (panels.tx == 0.0).all():
             return "assembly: inlet"
-        return "assembly: membrane sources (membrane + wall targets)"
+        return "assembly: membrane on itself"
 
     V, D = bem.vesicle.VesicleOperator, bem.drop.DropOperator
     prof.timer(bem.vesicle, "influence", None, classify=source)
+    prof.timer(bem.vesicle, "influence_pair", "assembly: membrane and wall on each other")
     prof.timer(scipy.linalg, "lu_solve", "wall LU back-substitution")
     prof.timer(scipy.linalg, "lstsq", "tension/V least squares (lstsq)")
     prof.timer(V, "curve", "curve construction (closed curve, area secant)")
     prof.timer(D, "panels", "membrane panels (curve sampling)")
     prof.timer(bem.vesicle, "bending_force", "bending force")
     prof.timer(bem.vesicle, "tension_basis", "tension basis")
-    prof.timer(V, "_columns", "operator products (A@Q, B@qw, ...)")
+    prof.timer(V, "_flow", "operator products (A@Q, B@qw, ...)")
     prof.timer(V, "evaluate", "evaluate: rest", evaluation=True)
-    prof.timer(bem.newton, "difference_jacobian", "Newton: difference Jacobian")
+    prof.timer(V, "fixed_residual", "fixed-load point: rest", evaluation=True)
+    prof.timer(V, "linearised_residual", "linearised point: membrane near panels, inlet",
+               evaluation=True)
+    prof.timer(V, "taylor", "linearised Jacobian: far-field expansion")
+    prof.timer(V, "linearised_finish", "linearised Jacobian: far products, wall solve")
+    for owner in (bem.newton, bem.vesicle):        # the vesicle's prolonged Jacobians too
+        prof.timer(owner, "difference_jacobian", "Newton: difference Jacobian")
     prof.timer(bem.newton, "_directional_update", "Newton: directional update")
     prof.timer(bem.newton, "_damped_step", "Newton: damped LM step")
     prof.timer(bem.newton, "_promised", "Newton: Gauss-Newton promise")
@@ -266,7 +281,10 @@ def print_solve(d: dict) -> None:
                    "membrane panels (curve sampling)", "bending force", "tension basis"],
               "linear algebra in evaluations (LU + lstsq + products + rest)":
                   ["wall LU back-substitution", "tension/V least squares (lstsq)",
-                   "operator products (A@Q, B@qw, ...)", "evaluate: rest"]}
+                   "operator products (A@Q, B@qw, ...)", "evaluate: rest",
+                   "fixed-load point: rest"],
+              "linearised Jacobian points (points + expansion + finish)":
+                  [c for c in rows if c.startswith("linearised")]}
     for g, cs in groups.items():
         s = sum(d["excl"].get(c, 0.0) for c in cs)
         print(f"    = {g:<56} {s:8.3f} {100 * s / wall:6.1f}")
@@ -381,7 +399,7 @@ def profile_scaling(modes, repeats: int, newton: bool, nu=0.9, lam=1.0, ca_b=50.
 
 
 def print_scaling(rows: list, repeats: int) -> None:
-    cols = [("memb src", ["assembly: membrane sources (membrane + wall targets)"]),
+    cols = [("memb src", ["assembly: membrane on itself"]),
             ("wall src", ["assembly: wall sources"]), ("inlet", ["assembly: inlet"]),
             ("LU solve", ["wall LU back-substitution"]),
             ("lstsq", ["tension/V least squares (lstsq)"]),
