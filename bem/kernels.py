@@ -211,6 +211,12 @@ def ring_stokeslet(x0, r0, x, r):
 # Panel geometry helpers (panels are polynomials of degree p-1 in t in [-1, 1], given by their
 # Legendre coefficients; densities are interpolated by the Lagrange basis on the Gauss nodes)
 # --------------------------------------------------------------------------------------------
+#: the coefficients (2n + 1)/(n + 1) and n/(n + 1) of the Legendre recurrence for n < 128,
+#: each the correctly rounded quotient (as the loop would compute it: the same values)
+_REC_A = np.array([(2.0 * n + 1.0) / (n + 1.0) for n in range(128)])
+_REC_B = np.array([n / (n + 1.0) for n in range(128)])
+
+
 @numba.njit(cache=True)
 def _curve_eval(cx, cr, t):
     """(x, dx/dt, r, dr/dt) of the panel curve sum_n (cx[n], cr[n]) P_n(t) at t, by the
@@ -232,8 +238,8 @@ def _curve_eval(cx, cr, t):
     dr += cr[1] * D1
     for n in range(1, p - 1):
         # the coefficients depend on n only: no division in the chain P0 -> P1 -> P2
-        a = (2.0 * n + 1.0) / (n + 1.0)
-        b = n / (n + 1.0)
+        a = _REC_A[n]
+        b = _REC_B[n]
         P2 = a * t * P1 - b * P0
         D2 = D0 + (2.0 * n + 1.0) * P1
         x += cx[n + 1] * P2
@@ -306,8 +312,9 @@ def _accumulate_interval(x0, r0, a, b, n, gx, gw, cx, cr, tn, bw, ell, acc):
 
 
 @numba.njit(cache=True)
-def _graded_side(x0, r0, ts, length, sgn, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol):
-    """Integrate over [ts, ts + sgn*length] with a geometric mesh graded toward ts.
+def _graded_side(ts, length, sgn, delta_t, nmax, tol, iv, count):
+    """Append to iv[count:] the intervals (a, b, n) of an n-point Gauss rule each that cover
+    [ts, ts + sgn*length] on a geometric mesh graded toward ts; returns the new count.
 
     Interval j covers distances [sigma^(j+1), sigma^j] * length from ts; its Gauss order is
     the smallest that meets ``tol`` given the Bernstein-ellipse rate rho of a singularity at
@@ -315,7 +322,6 @@ def _graded_side(x0, r0, ts, length, sgn, delta_t, gx, gw, cx, cr, tn, bw, ell, 
     the integral (~sigma^j). Grading stops when the innermost interval is shorter than the
     distance to the singularity delta_t (near-singular case) or than 1e-15 (on the panel).
     """
-    nmax = gx.shape[0] - 1
     sigma = 0.2
     log_rho = math.log((1.0 + math.sqrt(sigma)) / (1.0 - math.sqrt(sigma)))
     log_tol = -math.log(tol)
@@ -337,13 +343,36 @@ def _graded_side(x0, r0, ts, length, sgn, delta_t, gx, gw, cx, cr, tn, bw, ell, 
             n = nmax
         n = max(4, min(nmax, n))
         if sgn > 0:
-            _accumulate_interval(x0, r0, ts + lo, ts + hi, n, gx, gw, cx, cr, tn, bw, ell, acc)
+            iv[count, 0] = ts + lo
+            iv[count, 1] = ts + hi
         else:
-            _accumulate_interval(x0, r0, ts - hi, ts - lo, n, gx, gw, cx, cr, tn, bw, ell, acc)
+            iv[count, 0] = ts - hi
+            iv[count, 1] = ts - lo
+        iv[count, 2] = n
+        count += 1
         if last:
-            break
+            return count
         hi = lo
         j += 1
+
+
+@numba.njit(cache=True)
+def _graded_plan(x0, r0, cx, cr, t_start, nmax, tol, iv):
+    """The intervals (a, b, n) of :func:`panel_integral` in iv (at most 64; the grading stops
+    at 1e-15 of the side, ~22 intervals): the panel split at the parameter t* of its point
+    nearest to the target (Gauss-Newton from ``t_start``), each side graded toward t*
+    (:func:`_graded_side`). Returns their count."""
+    ts = _nearest_parameter(x0, r0, cx, cr, t_start)
+    x, dx, r, dr = _curve_eval(cx, cr, ts)
+    dist = math.sqrt((x - x0) ** 2 + (r - r0) ** 2)
+    speed = math.sqrt(dx * dx + dr * dr)
+    delta_t = dist / speed
+    count = 0
+    if ts > -1.0:
+        count = _graded_side(ts, ts + 1.0, -1, delta_t, nmax, tol, iv, count)
+    if ts < 1.0:
+        count = _graded_side(ts, 1.0 - ts, 1, delta_t, nmax, tol, iv, count)
+    return count
 
 
 @numba.njit(cache=True)
@@ -354,15 +383,10 @@ def _graded_panel(x0, r0, cx, cr, t_start, tn, bw, gx, gw, tol, acc):
     for k in range(p):
         for c in range(4):
             acc[k, c] = 0.0
-    ts = _nearest_parameter(x0, r0, cx, cr, t_start)
-    x, dx, r, dr = _curve_eval(cx, cr, ts)
-    dist = math.sqrt((x - x0) ** 2 + (r - r0) ** 2)
-    speed = math.sqrt(dx * dx + dr * dr)
-    delta_t = dist / speed
-    if ts > -1.0:
-        _graded_side(x0, r0, ts, ts + 1.0, -1, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol)
-    if ts < 1.0:
-        _graded_side(x0, r0, ts, 1.0 - ts, 1, delta_t, gx, gw, cx, cr, tn, bw, ell, acc, tol)
+    iv = np.empty((64, 3))
+    for j in range(_graded_plan(x0, r0, cx, cr, t_start, gx.shape[0] - 1, tol, iv)):
+        _accumulate_interval(x0, r0, iv[j, 0], iv[j, 1], int(iv[j, 2]), gx, gw, cx, cr, tn,
+                             bw, ell, acc)
 
 
 @numba.njit(cache=True)
@@ -702,17 +726,6 @@ def cross_far_taylor_serial(ax, ar, aw, bx, br, near_ab, near_ba, A_ab, A_ba):
 
 
 @numba.njit(cache=True, nogil=True)
-def near_panels(pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol, acc):
-    """Graded integrals of the near pairs of an influence matrix: acc[n] the weights of panel
-    P on target (tx[i], tr[i]) for pairs[n] = (i, P) (the block :func:`_store` writes there)."""
-    for n in range(pairs.shape[0]):
-        i = pairs[n, 0]
-        P = pairs[n, 1]
-        best = _near_panel(tx[i], tr[i], px, pr, pw, P, math.inf)[1]
-        _graded_panel(tx[i], tr[i], pcx[P], pcr[P], tn[best], tn, bw, gx, gw, tol, acc[n])
-
-
-@numba.njit(cache=True, nogil=True)
 def near_product(pairs, acc, p, q, out):
     """out[2 i + α] += sum_k acc[n, k, (α, β)] q[2 (Q p + k) + β] over pairs[n] = (i, Q)."""
     for n in range(pairs.shape[0]):
@@ -779,37 +792,28 @@ def self_far_taylor_serial(bx, br, near_dd, A):
         _self_taylor_rows(c, n_chunks, bx, br, near_dd, A)
 
 
-@numba.njit(cache=True, nogil=True)
-def self_near_panels(pairs, bx, br, bw_, bcx, bcr, fixed, tn, bw, gx, gw, tol, st, sw, sell,
-                     acc):
-    """The near and self blocks of :func:`influence_matrix` of a panel set on its own nodes:
-    acc[n] the weights of panel P on node i for pairs[n] = (i, P), by the fixed self rule
-    where i is a node of P and fixed[P], else by the graded rule."""
-    p = tn.shape[0]
-    for n in range(pairs.shape[0]):
-        i = pairs[n, 0]
-        P = pairs[n, 1]
-        x0 = bx[i // p, i % p]
-        r0 = br[i // p, i % p]
-        if i // p == P and fixed[P]:
-            k0 = i - P * p
-            self_panel_integral(x0, r0, bcx[P], bcr[P], st[k0], sw[k0], sell[k0], acc[n])
-        else:
-            best = _near_panel(x0, r0, bx, br, bw_, P, math.inf)[1]
-            _graded_panel(x0, r0, bcx[P], bcr[P], tn[best], tn, bw, gx, gw, tol, acc[n])
+@numba.njit(cache=True, parallel=True)
+def near_target_taylor(pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol, acc, dx, dr):
+    """Graded integrals of fixed panels on moving targets and their derivatives in the target
+    position: for pairs[n] = (j, P), acc[n] the weights of panel P on target (tx[j], tr[j]) (the
+    block :func:`_store` writes there), dx[n] and dr[n] their derivatives in tx[j] and tr[j] by central
+    differences of step TAYLOR_STEP times the distance to P's nearest node (r - step stays
+    >= r/2), each integral with the Gauss–Newton search started from that node. Parallel over
+    the pairs."""
+    n_chunks = min(pairs.shape[0], 64)
+    for ch in numba.prange(n_chunks):
+        _near_target_rows(ch, n_chunks, pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol,
+                          acc, dx, dr)
 
 
 @numba.njit(cache=True)
-def near_target_taylor(pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol, acc, dx, dr):
-    """Graded integrals of fixed panels on moving targets and their derivatives in the target
-    position: for pairs[n] = (j, P), acc[n] the weights of panel P on target (tx[j], tr[j]) (as
-    :func:`near_panels`), dx[n] and dr[n] their derivatives in tx[j] and tr[j] by central
-    differences of step TAYLOR_STEP times the distance to P's nearest node (r - step stays
-    >= r/2), each integral with the Gauss–Newton search started from that node."""
+def _near_target_rows(ch, n_chunks, pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol,
+                      acc, dx, dr):
+    """The pairs n = ch, ch + n_chunks, ... of :func:`near_target_taylor`."""
     p = tn.shape[0]
     plus = np.empty((p, 4))
     minus = np.empty((p, 4))
-    for n in range(pairs.shape[0]):
+    for n in range(ch, pairs.shape[0], n_chunks):
         j = pairs[n, 0]
         P = pairs[n, 1]
         x0 = tx[j]
@@ -829,3 +833,169 @@ def near_target_taylor(pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol,
         for k in range(p):
             for c in range(4):
                 dr[n, k, c] = (plus[k, c] - minus[k, c]) * (0.5 / hr)
+
+
+# --------------------------------------------------------------------------------------------
+# Near panels of a moving panel set: the integrals and their derivatives in the panel's curve
+# (its Legendre coefficients) and in the target position, by differentiating the integrand at
+# the quadrature points (the rule is held fixed: it is smooth in the geometry)
+# --------------------------------------------------------------------------------------------
+@numba.njit(cache=True)
+def _legendre_values(t, P, D):
+    """P[n] = P_n(t) and D[n] = P_n'(t) for n < P.size (the recurrences of :func:`_curve_eval`)."""
+    p = P.shape[0]
+    P[0] = 1.0
+    D[0] = 0.0
+    if p > 1:
+        P[1] = t
+        D[1] = 1.0
+    for n in range(1, p - 1):
+        P[n + 1] = ((2.0 * n + 1.0) * t * P[n] - n * P[n - 1]) / (n + 1.0)
+        D[n + 1] = D[n - 1] + (2.0 * n + 1.0) * P[n]
+
+
+@numba.njit(cache=True)
+def _taylor_point(x0, r0, x, dx, r, dr, w, ell, P, D, g, acc, der):
+    r"""Add one quadrature point of a panel integral, the source X = (x, r) with X' = (dx, dr)
+    at its parameter t, weight w in t, Lagrange values ell and Legendre values P, D at t: to
+    acc[k, c] the weight :math:`w |X'| \ell_k M_c(x_0, r_0; X)` (as :func:`_accumulate_interval`)
+    and to der[k, c, m] its derivatives in the panel's Legendre coefficients (m < p: cx_m,
+    p <= m < 2p: cr_{m-p}; X = sum c_m P_m(t), so dX/dc_m = P_m(t), dX'/dc_m = P_m'(t)) and in
+    the target (m = 2p: x0, 2p + 1: r0). The kernel's derivatives by central differences
+    (:func:`_ring_taylor`; in x0 minus that in x: the kernel depends on x - x0)."""
+    p = P.shape[0]
+    jac = math.sqrt(dx * dx + dr * dr)
+    M, Mx, Mr = _ring_taylor(x0, r0, x, r)
+    h0 = min(TAYLOR_STEP * math.sqrt((x0 - x) ** 2 + (r0 - r) ** 2), 0.5 * r0)
+    Mr0 = _central(ring_stokeslet(x0, r0 + h0, x, r), ring_stokeslet(x0, r0 - h0, x, r), h0)
+    wj = w * jac
+    ux = w * dx / jac
+    ur = w * dr / jac
+    for c in range(4):
+        for m in range(p):
+            g[c, m] = wj * Mx[c] * P[m] + M[c] * ux * D[m]
+            g[c, p + m] = wj * Mr[c] * P[m] + M[c] * ur * D[m]
+        g[c, 2 * p] = -wj * Mx[c]
+        g[c, 2 * p + 1] = wj * Mr0[c]
+    for k in range(p):
+        wk = wj * ell[k]
+        acc[k, 0] += wk * M[0]
+        acc[k, 1] += wk * M[1]
+        acc[k, 2] += wk * M[2]
+        acc[k, 3] += wk * M[3]
+    # der[k] += ell[k] g: rank-one updates of contiguous rows (vectorised)
+    flat = g.ravel()
+    rows = der.reshape(p, flat.size)
+    for k in range(p):
+        e = ell[k]
+        row = rows[k]
+        for m in range(flat.size):
+            row[m] += e * flat[m]
+
+
+@numba.njit(cache=True)
+def _panel_taylor(x0, r0, cx, cr, t_start, self_k, st, sw, sell, tn, bw, gx, gw, tol, acc,
+                  der):
+    """acc = the weights of the panel (cx, cr) on the target (x0, r0) (as :func:`_graded_panel`
+    or, for self_k >= 0, as :func:`self_panel_integral` with the rule of node self_k) and der
+    their derivatives in the panel's Legendre coefficients and the target (:func:`_taylor_point`).
+    For a target that is a panel node, moving with it, the two parts' singular terms cancel in
+    the sum of der's products with a displacement of both (the rule sees their sum)."""
+    p = tn.shape[0]
+    ell = np.empty(p)
+    P = np.empty(p)
+    D = np.empty(p)
+    g = np.empty((4, 2 * p + 2))
+    acc[:] = 0.0
+    der[:] = 0.0
+    if self_k >= 0:
+        for i in range(st.shape[1]):
+            t = st[self_k, i]
+            x, dx, r, dr = _curve_eval(cx, cr, t)
+            if r <= 0.0:
+                continue
+            _legendre_values(t, P, D)
+            _taylor_point(x0, r0, x, dx, r, dr, sw[self_k, i], sell[self_k, i], P, D, g, acc,
+                          der)
+        return
+    iv = np.empty((64, 3))
+    for j in range(_graded_plan(x0, r0, cx, cr, t_start, gx.shape[0] - 1, tol, iv)):
+        a = iv[j, 0]
+        b = iv[j, 1]
+        n = int(iv[j, 2])
+        half = 0.5 * (b - a)
+        mid = 0.5 * (a + b)
+        for i in range(n):
+            t = mid + half * gx[n, i]
+            x, dx, r, dr = _curve_eval(cx, cr, t)
+            r = max(r, 0.0)
+            if r == 0.0 or (x == x0 and r == r0):
+                continue
+            _lagrange(t, tn, bw, ell)
+            _legendre_values(t, P, D)
+            _taylor_point(x0, r0, x, dx, r, dr, half * gw[n, i], ell, P, D, g, acc, der)
+
+
+@numba.njit(cache=True, parallel=True)
+def near_panels_taylor(pairs, tx, tr, own, px, pr, pw, pcx, pcr, fixed, tn, bw, gx, gw, tol,
+                       st, sw, sell, acc, der):
+    """The near blocks of a moving panel set on targets, and their derivatives: for
+    pairs[n] = (i, P), acc[n] the weights of panel P on target i (the block :func:`_store`
+    writes there; if ``own`` the targets are the panels' nodes, flat index i = Q p + k, and a
+    node on its own panel P with fixed[P] takes the fixed self rule, as in
+    :func:`influence_matrix`) and der[n, k, c, m] their derivatives in P's Legendre
+    coefficients and the target's position (:func:`_panel_taylor`). Parallel over the pairs."""
+    p = tn.shape[0]
+    n_chunks = min(pairs.shape[0], 64)
+    for ch in numba.prange(n_chunks):
+        for n in range(ch, pairs.shape[0], n_chunks):
+            i = pairs[n, 0]
+            P = pairs[n, 1]
+            self_k = i - P * p if own and i // p == P and fixed[P] else -1
+            best = _near_panel(tx[i], tr[i], px, pr, pw, P, math.inf)[1]
+            _panel_taylor(tx[i], tr[i], pcx[P], pcr[P], tn[best], self_k, st, sw, sell, tn, bw,
+                          gx, gw, tol, acc[n], der[n])
+
+
+@numba.njit(cache=True, parallel=True, fastmath=True)
+def near_products_taylor(pairs, acc, der, dcx, dcr, dtx, dtr, q, n_chunks, out):
+    """:func:`near_product` for many moved copies j of a panel set, each block to first order:
+    acc[n] plus der[n] times the displacement of panel Q's Legendre coefficients (dcx[j, Q],
+    dcr[j, Q]) and of target i (dtx[j, i], dtr[j, i]), for pairs[n] = (i, Q)
+    (:func:`near_panels_taylor`); out[j, 2 i + α] += sum_k block[k, (α, β)] q[j, 2 (Q p + k) + β].
+    The copies are dealt to ``n_chunks`` threads, each running through the pairs once (a
+    block's derivatives, 2176 numbers at p = 16, stay in cache for all its copies); the
+    contractions are vectorised (fastmath: summed in another order than written)."""
+    p = acc.shape[1]
+    nm = 2 * p + 2
+    m_pts = q.shape[0]
+    for ch in numba.prange(n_chunks):
+        delta = np.empty(nm)
+        for n in range(pairs.shape[0]):
+            i = pairs[n, 0]
+            Q = pairs[n, 1]
+            base = 2 * Q * p
+            for j in range(ch, m_pts, n_chunks):
+                for m in range(p):
+                    delta[m] = dcx[j, Q, m]
+                    delta[p + m] = dcr[j, Q, m]
+                delta[2 * p] = dtx[j, i]
+                delta[2 * p + 1] = dtr[j, i]
+                sx = 0.0
+                sr = 0.0
+                for k in range(p):
+                    a0 = acc[n, k, 0]
+                    a1 = acc[n, k, 1]
+                    a2 = acc[n, k, 2]
+                    a3 = acc[n, k, 3]
+                    for m in range(nm):
+                        a0 += der[n, k, 0, m] * delta[m]
+                        a1 += der[n, k, 1, m] * delta[m]
+                        a2 += der[n, k, 2, m] * delta[m]
+                        a3 += der[n, k, 3, m] * delta[m]
+                    qx = q[j, base + 2 * k]
+                    qr = q[j, base + 2 * k + 1]
+                    sx += a0 * qx + a1 * qr
+                    sr += a2 * qx + a3 * qr
+                out[j, 2 * i] += sx
+                out[j, 2 * i + 1] += sr

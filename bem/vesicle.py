@@ -187,6 +187,22 @@ Solver paths, before → after (each remaining one with its reason):
   13.4–15.7 s far pairs, 12.4–12.9 s near panels too. The six other default cases take the
   same BIE solves as with exact points, their outputs move by less than 1e-3 of their
   estimates and their times by the machine's noise (``default_cases.py``).
+  The membrane's near and self panels per point → expanded too, in the panels' Legendre
+  coefficients and the nodes (:func:`bem.kernels.near_panels_taylor`, the integrand
+  differentiated on each pair's rule; derivatives within 2.5e-10 of central differences of
+  the integrals), their products with all the points' displacements in one pass
+  (:func:`bem.kernels.near_products_taylor`). At the converged 96-mode shape of (0.6, 1.94):
+  per point on one thread 54 → 24 ms (curve construction and loads are now most of it), the
+  expansion 0.13 → 0.47 s on 2 threads, a 94-point Jacobian 3.3–3.5 → 1.6–1.8 s, its columns
+  within 4.5e-6 of the largest column of exact differences (1.4e-5 with only the far pairs
+  expanded). Default solves back to back on 2 cores (a slow hour): (0.6, 1.94) 75.1–81.7 s
+  (1485 BIE solves, 96 modes) → 61.0–66.7 s (1486, converged at 88 modes: the columns'
+  rounding changed the path; estimates 5.9e-5, 0.049, 4.8 for V/U, Δp⁺, γ_max, true errors
+  8.6e-6, 7e-4, 1.4 against the mode-converged values); (0.61, 1.39) 15.4–16.6 s → 12.2–13.0 s
+  (448 BIE solves both). Also measured and not adopted: the directional updates' points
+  linearised about the level's last Jacobian (its base moved by up to 1e-3 since, which
+  errs at first order in the directions of the smallest singular values): at (0.6, 1.94) the
+  valley stalled, 2672 BIE solves, not converged at 96 modes.
 * the valley method's floor test: a fresh difference Jacobian at every stall → the Jacobian
   differenced at this level certifies when the iterate has moved by less than
   :data:`bem.newton.RECENT_STEP` since (:func:`bem.newton.valley_levenberg_marquardt`). At
@@ -527,15 +543,18 @@ class VesicleOperator(DropOperator):
         return u * np.repeat(np.sqrt(drop.w.ravel()), 2)
 
     def taylor(self, base) -> dict:
-        """The far field of a membrane expanded about its panels ``base`` (a state's
-        ``panels``), for :meth:`linearised_residual` and :meth:`linearised_finish`: the near
-        pairs (membrane on itself, wall and membrane on each other; as :func:`bem.quadrature.
-        influence` classifies them at ``base``), the far entries with their derivatives in
-        the membrane node positions (:func:`bem.kernels.cross_far_taylor`,
-        :func:`bem.kernels.self_far_taylor`: 5 and 7 ring Stokeslets per far pair) and the
-        wall's near panels on the membrane nodes with their derivatives in those nodes
-        (:func:`bem.kernels.near_target_taylor`: 5 graded integrals per pair), once for all
-        the points."""
+        """The influence of a membrane expanded about its panels ``base`` (a state's
+        ``panels``) to first order in its geometry, for :meth:`linearised_residual` and
+        :meth:`linearised_finish`: the near pairs (membrane on itself, wall and membrane on
+        each other; as :func:`bem.quadrature.influence` classifies them at ``base``), the far
+        entries with their derivatives in the membrane node positions
+        (:func:`bem.kernels.cross_far_taylor`, :func:`bem.kernels.self_far_taylor`: 5 and 7
+        ring Stokeslets per far pair), the wall's near panels on the membrane nodes with
+        their derivatives in those nodes (:func:`bem.kernels.near_target_taylor`: 5 graded
+        integrals per pair) and the membrane's near panels on the wall nodes and on its own
+        nodes with their derivatives in the panels' Legendre coefficients and the nodes
+        (:func:`bem.kernels.near_panels_taylor`: the integrand differentiated on the rule of
+        each pair, 7 ring Stokeslets per quadrature point), once for all the points."""
         from . import kernels
 
         wall = self.wall
@@ -564,52 +583,45 @@ class VesicleOperator(DropOperator):
         acc_ba = [np.empty((n_ba, p, 4)) for _ in range(3)]
         tn, _ = gauss_legendre(p)
         gx, gw = gauss_table()
+        bw = barycentric_weights(p)
+        tol = self.disc.quad_tol
         kernels.near_target_taylor(pairs["ba"], xb, rb, wall.x, wall.r, wall.w, wall.cx,
-                                   wall.cr, tn, barycentric_weights(p), gx, gw,
-                                   self.disc.quad_tol, *acc_ba)
+                                   wall.cr, tn, bw, gx, gw, tol, *acc_ba)
+        near = {}
+        for key, tx, tr, own in (("ab", wall.x.ravel(), wall.r.ravel(), False),
+                                 ("dd", xb, rb, True)):
+            n = pairs[key].shape[0]
+            near[key] = (np.empty((n, p, 4)), np.empty((n, p, 4, 2 * p + 2)))
+            kernels.near_panels_taylor(pairs[key], tx, tr, own, base.x, base.r, base.w,
+                                       base.cx, base.cr, fixed, tn, bw, gx, gw, tol,
+                                       *self_rule(p), *near[key])
         return {"base": base, "A_ab": A_ab, "A_ba": A_ba, "A_dd": A_dd, "pairs": pairs,
-                "fixed": fixed, "acc_ba": acc_ba}
+                "fixed": fixed, "acc_ba": acc_ba, "near": near}
 
     def linearised_residual(self, curve: SpectralCurve, g, V: float, taylor: dict) -> dict:
         r"""The part of :meth:`fixed_residual` that each point needs on its own: the loads,
-        the membrane's near panels (on the wall nodes and on its own nodes: graded and self
-        quadrature on the moved panels) and the inlet; the far pairs, the wall's near panels
-        and the wall solve of all the points are left to :meth:`linearised_finish`. Returns
-        the pieces it needs."""
-        from . import kernels
-
+        the displacements of the membrane's nodes and panel curves from ``taylor``'s and the
+        inlet; the influence matrices and the wall solve of all the points are left to
+        :meth:`linearised_finish`. Returns the pieces it needs."""
         drop, Q, dp = self._loads(curve, g)
-        tol, p, wall = self.disc.quad_tol, self.p, self.wall
+        base = taylor["base"]
         q = Q[:, 0]
         xb, rb = drop.x.ravel(), drop.r.ravel()
-        pairs = taylor["pairs"]
-        acc = {k: np.empty((pairs[k].shape[0], p, 4)) for k in ("ab", "dd")}
-        tn, _ = gauss_legendre(p)
-        bw = barycentric_weights(p)
-        gx, gw = gauss_table()
-        kernels.near_panels(pairs["ab"], wall.x.ravel(), wall.r.ravel(), drop.x, drop.r,
-                            drop.w, drop.cx, drop.cr, tn, bw, gx, gw, tol, acc["ab"])
-        kernels.self_near_panels(pairs["dd"], drop.x, drop.r, drop.w, drop.cx, drop.cr,
-                                 taylor["fixed"], tn, bw, gx, gw, tol, *self_rule(p),
-                                 acc["dd"])
-        inl = influence(xb, rb, self.inlet, tol=tol)
-        u = inl[:, 0::2].sum(axis=1) * dp[0]
-        kernels.near_product(pairs["dd"], acc["dd"], p, q, u)
-        u /= _EIGHT_PI
+        dx, dr = xb - base.x.ravel(), rb - base.r.ravel()
+        inl = influence(xb, rb, self.inlet, tol=self.disc.quad_tol)
+        u = inl[:, 0::2].sum(axis=1) * dp[0] / _EIGHT_PI
         u[0::2] += poiseuille(rb) - V
-        wall_near = np.zeros(2 * wall.n_nodes)
-        kernels.near_product(pairs["ab"], acc["ab"], p, q, wall_near)
-        base = taylor["base"]
-        return {"u": u, "v": np.repeat(drop.w.ravel(), 2) * q, "dp": float(dp[0]),
-                "dx": np.repeat(xb - base.x.ravel(), 2), "dr": np.repeat(rb - base.r.ravel(), 2),
-                "wall_near": wall_near, "sw": np.repeat(np.sqrt(drop.w.ravel()), 2)}
+        return {"u": u, "q": q, "v": np.repeat(drop.w.ravel(), 2) * q, "dp": float(dp[0]),
+                "dx": dx, "dr": dr, "dcx": drop.cx - base.cx, "dcr": drop.cr - base.cr,
+                "sw": np.repeat(np.sqrt(drop.w.ravel()), 2)}
 
     def linearised_finish(self, taylor: dict, parts: list) -> list:
         r"""Weighted residuals of the points of :meth:`linearised_residual` (None where a
-        point is None): the far entries and the wall's near panels of each moved membrane are
-        those of ``taylor`` plus their derivatives times the node displacements (exact to
-        second order in the displacements; for a difference Jacobian, steps ~1e-7), all
-        points in a few products and one wall solve."""
+        point is None): every influence entry of each moved membrane is that of ``taylor``
+        plus its derivatives times the displacements (exact to second order in the
+        displacements; for a difference Jacobian, steps ~1e-7), all points in a few products,
+        one pass through the near blocks (:func:`bem.kernels.near_products_taylor`) and one
+        wall solve."""
         from . import kernels
 
         ok = [k for k, pt in enumerate(parts) if pt is not None]
@@ -618,12 +630,22 @@ class VesicleOperator(DropOperator):
             return out
         pts = [parts[k] for k in ok]
         V = np.column_stack([pt["v"] for pt in pts])
-        DX = np.column_stack([pt["dx"] for pt in pts])
-        DR = np.column_stack([pt["dr"] for pt in pts])
+        DX = np.repeat(np.column_stack([pt["dx"] for pt in pts]), 2, axis=0)
+        DR = np.repeat(np.column_stack([pt["dr"] for pt in pts]), 2, axis=0)
         n2 = V.shape[0]
+        # the near blocks of the membrane (on the wall nodes, on its own nodes) of every point
+        moved = {k: np.stack([pt[k] for pt in pts]) for k in ("q", "dx", "dr", "dcx", "dcr")}
+        near = {}
+        for key, n_targets in (("ab", self.wall.n_nodes), ("dd", n2 // 2)):
+            near[key] = np.zeros((len(pts), 2 * n_targets))
+            still = np.zeros((len(pts), n_targets))
+            kernels.near_products_taylor(
+                taylor["pairs"][key], *taylor["near"][key], moved["dcx"], moved["dcr"],
+                moved["dx"] if key == "dd" else still, moved["dr"] if key == "dd" else still,
+                moved["q"], min(_workers(), len(pts)), near[key])
         X = np.vstack([V, DX * V, DR * V])
         rhs = taylor["A_ab"] @ X
-        rhs += np.column_stack([pt["wall_near"] for pt in pts])
+        rhs += near["ab"].T
         rhs /= _EIGHT_PI
         rhs += np.outer(self.col_dp_wall, [pt["dp"] for pt in pts])
         with _LAPACK:
@@ -640,7 +662,7 @@ class VesicleOperator(DropOperator):
             for acc, uc in zip(taylor["acc_ba"], u):
                 kernels.near_product(pba, acc, p, qw[:, c], uc)
             u = u[0] + DX[:, c] * u[1] + DR[:, c] * u[2]
-            out[k] = (pt["u"] + U[:, c] + u / _EIGHT_PI) * pt["sw"]
+            out[k] = (pt["u"] + U[:, c] + (u + near["dd"][c]) / _EIGHT_PI) * pt["sw"]
         return out
 
 
@@ -883,9 +905,9 @@ def _workers() -> int:
 
 
 #: fixed-load points evaluated together from this many on (a difference Jacobian, not the
-#: few points of a directional update) share the far field of the membrane expanded about the
+#: few points of a directional update) share the influence of the membrane expanded about the
 #: state differentiated (:meth:`VesicleOperator.taylor`: 5 or 7 ring Stokeslets per far pair
-#: once, against one per far pair and point)
+#: and 7 per quadrature point of a near pair once, against one of each per point)
 LINEARISED_POINTS = 8
 
 

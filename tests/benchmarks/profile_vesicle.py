@@ -195,10 +195,10 @@ def install(prof: Profiler) -> None:
     prof.timer(V, "_flow", "operator products (A@Q, B@qw, ...)")
     prof.timer(V, "evaluate", "evaluate: rest", evaluation=True)
     prof.timer(V, "fixed_residual", "fixed-load point: rest", evaluation=True)
-    prof.timer(V, "linearised_residual", "linearised point: membrane near panels, inlet",
+    prof.timer(V, "linearised_residual", "linearised point: displacements, inlet",
                evaluation=True)
-    prof.timer(V, "taylor", "linearised Jacobian: far-field expansion")
-    prof.timer(V, "linearised_finish", "linearised Jacobian: far products, wall solve")
+    prof.timer(V, "taylor", "linearised Jacobian: expansion (far pairs, near blocks)")
+    prof.timer(V, "linearised_finish", "linearised Jacobian: products, wall solve")
     for owner in (bem.newton, bem.vesicle):        # the vesicle's prolonged Jacobians too
         prof.timer(owner, "difference_jacobian", "Newton: difference Jacobian")
     prof.timer(bem.newton, "_directional_update", "Newton: directional update")
