@@ -792,20 +792,6 @@ def self_far_taylor_serial(bx, br, near_dd, A):
         _self_taylor_rows(c, n_chunks, bx, br, near_dd, A)
 
 
-@numba.njit(cache=True, parallel=True)
-def near_target_taylor(pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol, acc, dx, dr):
-    """Graded integrals of fixed panels on moving targets and their derivatives in the target
-    position: for pairs[n] = (j, P), acc[n] the weights of panel P on target (tx[j], tr[j]) (the
-    block :func:`_store` writes there), dx[n] and dr[n] their derivatives in tx[j] and tr[j] by central
-    differences of step TAYLOR_STEP times the distance to P's nearest node (r - step stays
-    >= r/2), each integral with the Gauss–Newton search started from that node. Parallel over
-    the pairs."""
-    n_chunks = min(pairs.shape[0], 64)
-    for ch in numba.prange(n_chunks):
-        _near_target_rows(ch, n_chunks, pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol,
-                          acc, dx, dr)
-
-
 @numba.njit(cache=True)
 def _near_target_rows(ch, n_chunks, pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol,
                       acc, dx, dr):
@@ -833,6 +819,20 @@ def _near_target_rows(ch, n_chunks, pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw,
         for k in range(p):
             for c in range(4):
                 dr[n, k, c] = (plus[k, c] - minus[k, c]) * (0.5 / hr)
+
+
+@numba.njit(cache=True, parallel=True)
+def near_target_taylor(pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol, acc, dx, dr):
+    """Graded integrals of fixed panels on moving targets and their derivatives in the target
+    position: for pairs[n] = (j, P), acc[n] the weights of panel P on target (tx[j], tr[j]) (the
+    block :func:`_store` writes there), dx[n] and dr[n] their derivatives in tx[j] and tr[j] by central
+    differences of step TAYLOR_STEP times the distance to P's nearest node (r - step stays
+    >= r/2), each integral with the Gauss–Newton search started from that node. Parallel over
+    the pairs."""
+    n_chunks = min(pairs.shape[0], 64)
+    for ch in numba.prange(n_chunks):
+        _near_target_rows(ch, n_chunks, pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol,
+                          acc, dx, dr)
 
 
 # --------------------------------------------------------------------------------------------
