@@ -825,10 +825,10 @@ def _near_target_rows(ch, n_chunks, pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw,
 def near_target_taylor(pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol, acc, dx, dr):
     """Graded integrals of fixed panels on moving targets and their derivatives in the target
     position: for pairs[n] = (j, P), acc[n] the weights of panel P on target (tx[j], tr[j]) (the
-    block :func:`_store` writes there), dx[n] and dr[n] their derivatives in tx[j] and tr[j] by central
-    differences of step TAYLOR_STEP times the distance to P's nearest node (r - step stays
-    >= r/2), each integral with the Gauss–Newton search started from that node. Parallel over
-    the pairs."""
+    block :func:`_store` writes there), dx[n] and dr[n] their derivatives in tx[j] and tr[j]
+    by central differences of step TAYLOR_STEP times the distance to P's nearest node (r -
+    step stays >= r/2), each integral with the Gauss–Newton search started from that node.
+    Parallel over the pairs."""
     n_chunks = min(pairs.shape[0], 64)
     for ch in numba.prange(n_chunks):
         _near_target_rows(ch, n_chunks, pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol,
@@ -962,7 +962,8 @@ def near_products_taylor(pairs, acc, der, dcx, dcr, dtx, dtr, q, n_chunks, out):
     """:func:`near_product` for many moved copies j of a panel set, each block to first order:
     acc[n] plus der[n] times the displacement of panel Q's Legendre coefficients (dcx[j, Q],
     dcr[j, Q]) and of target i (dtx[j, i], dtr[j, i]), for pairs[n] = (i, Q)
-    (:func:`near_panels_taylor`); out[j, 2 i + α] += sum_k block[k, (α, β)] q[j, 2 (Q p + k) + β].
+    (:func:`near_panels_taylor`); out[j, 2 i + α] += sum_k block[k, (α, β)]
+    q[j, 2 (Q p + k) + β].
     The copies are dealt to ``n_chunks`` threads, each running through the pairs once (a
     block's derivatives, 2176 numbers at p = 16, stay in cache for all its copies); the
     contractions are vectorised (fastmath: summed in another order than written)."""

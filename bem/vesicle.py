@@ -202,7 +202,19 @@ Solver paths, before → after (each remaining one with its reason):
   (448 BIE solves both). Also measured and not adopted: the directional updates' points
   linearised about the level's last Jacobian (its base moved by up to 1e-3 since, which
   errs at first order in the directions of the smallest singular values): at (0.6, 1.94) the
-  valley stalled, 2672 BIE solves, not converged at 96 modes.
+  valley stalled, 2672 BIE solves, not converged at 96 modes. With the Jacobians this cheap
+  (a 46-point Jacobian at 48 modes costs about three directional updates), measured at
+  (0.6, 1.94) and not adopted: a fresh difference Jacobian after every accepted step of the
+  valley method instead of the directional updates (54.9 s against 57.3 s, profiled minutes
+  apart, 3044 BIE solves, converged at 96 modes; the other valley cases of the default set:
+  (0.6, 1.5) 14 → 16 s, the others within the machine's noise); the same on the levels
+  started from a prolonged Jacobian only (their Gauss–Newton steps end in 3–4 iterations at
+  the floor test, short of the valley's minimum: not converged at 96 modes, V/U estimate
+  1.5e-4 relative); 2 or 1 directions per update instead of 3 (on 2 threads the 3 or 2
+  points of an update take as long as 4 or cost half; (0.6, 1.94): 1174 or 1167 BIE solves,
+  37–46 s against 48–54 s for 1486, but at Ca_B = 50.01 2 directions took 1431 BIE solves
+  against 1224 for 3, and with 1 direction the Δp⁺ estimate, 0.016, fell below the true
+  error, 0.033).
 * the valley method's floor test: a fresh difference Jacobian at every stall → the Jacobian
   differenced at this level certifies when the iterate has moved by less than
   :data:`bem.newton.RECENT_STEP` since (:func:`bem.newton.valley_levenberg_marquardt`). At
@@ -635,14 +647,13 @@ class VesicleOperator(DropOperator):
         n2 = V.shape[0]
         # the near blocks of the membrane (on the wall nodes, on its own nodes) of every point
         moved = {k: np.stack([pt[k] for pt in pts]) for k in ("q", "dx", "dr", "dcx", "dcr")}
-        near = {}
-        for key, n_targets in (("ab", self.wall.n_nodes), ("dd", n2 // 2)):
-            near[key] = np.zeros((len(pts), 2 * n_targets))
-            still = np.zeros((len(pts), n_targets))
+        still = np.zeros((len(pts), self.wall.n_nodes))               # the wall does not move
+        near = {"ab": np.zeros((len(pts), 2 * self.wall.n_nodes)),
+                "dd": np.zeros((len(pts), n2))}
+        for key, dtx, dtr in (("ab", still, still), ("dd", moved["dx"], moved["dr"])):
             kernels.near_products_taylor(
-                taylor["pairs"][key], *taylor["near"][key], moved["dcx"], moved["dcr"],
-                moved["dx"] if key == "dd" else still, moved["dr"] if key == "dd" else still,
-                moved["q"], min(_workers(), len(pts)), near[key])
+                taylor["pairs"][key], *taylor["near"][key], moved["dcx"], moved["dcr"], dtx,
+                dtr, moved["q"], min(_workers(), len(pts)), near[key])
         X = np.vstack([V, DX * V, DR * V])
         rhs = taylor["A_ab"] @ X
         rhs += near["ab"].T

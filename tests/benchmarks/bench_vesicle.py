@@ -80,6 +80,10 @@ def main() -> None:
     unknown = [c for c in names if c not in CASES]
     if unknown or args.repeats < 1:
         ap.error(f"--cases must be from {', '.join(CASES)} and --repeats >= 1")
+    from bench_store import DATA
+    if args.json and Path(args.json).resolve() == (DATA / "bench_vesicle.json").resolve():
+        ap.error(f"--json {args.json}: the benchmark's own store (written in any case, in its "
+                 "own format); give another file for the rows")
     rows = []
     print(f"{'case':>6} {'nu':>5} {'lam/lc':>6} {'min s':>7} {'median s':>8} {'target':>6} "
           f"{'BIE':>6} {'conv':>5} {'modes':>5} {'V/U':>10} {'dp+R0':>9} {'g_max':>8} "
