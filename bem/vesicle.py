@@ -642,11 +642,11 @@ class VesicleOperator(DropOperator):
             return out
         pts = [parts[k] for k in ok]
         V = np.column_stack([pt["v"] for pt in pts])
-        DX = np.repeat(np.column_stack([pt["dx"] for pt in pts]), 2, axis=0)
-        DR = np.repeat(np.column_stack([pt["dr"] for pt in pts]), 2, axis=0)
+        moved = {k: np.stack([pt[k] for pt in pts]) for k in ("q", "dx", "dr", "dcx", "dcr")}
+        DX = np.repeat(moved["dx"].T, 2, axis=0)
+        DR = np.repeat(moved["dr"].T, 2, axis=0)
         n2 = V.shape[0]
         # the near blocks of the membrane (on the wall nodes, on its own nodes) of every point
-        moved = {k: np.stack([pt[k] for pt in pts]) for k in ("q", "dx", "dr", "dcx", "dcr")}
         still = np.zeros((len(pts), self.wall.n_nodes))               # the wall does not move
         near = {"ab": np.zeros((len(pts), 2 * self.wall.n_nodes)),
                 "dd": np.zeros((len(pts), n2))}

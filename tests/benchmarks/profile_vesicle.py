@@ -8,9 +8,9 @@ Levenberg–Marquardt driver (:mod:`bem.newton`): influence-matrix assembly (mem
 membrane and wall on each other, wall sources, inlet), wall LU back-substitution, tension/V least
 squares, curve construction (closed curve and area secant), membrane panels (curve sampling),
 bending and tension forces, the dense products of the operator, the fixed-load points of
-directional updates, the linearised points of difference Jacobians (each point's membrane near
-panels and inlet; once per Jacobian the far-field expansion and the products and wall solve of
-all its points), Newton linear algebra, level set-up, seed and outputs. Times are *exclusive*
+directional updates, the linearised points of difference Jacobians (each point's displacements
+and inlet; once per Jacobian the expansion of the far pairs and near blocks and the products and
+wall solve of all its points), Newton linear algebra, level set-up, seed and outputs. Times are *exclusive*
 (a timer's time minus that of the timers called inside it), so the rows add up to the wall
 time; "unaccounted" is the rest (driver code). The evaluations are split by what asked for
 them (difference-Jacobian columns, prolonged Jacobians' new columns included; directional
@@ -59,9 +59,9 @@ _ORDER = ["assembly: membrane on itself", "assembly: membrane and wall on each o
           "curve construction (closed curve, area secant)", "membrane panels (curve sampling)",
           "bending force", "tension basis", "operator products (A@Q, B@qw, ...)",
           "evaluate: rest", "fixed-load point: rest",
-          "linearised point: membrane near panels, inlet",
-          "linearised Jacobian: far-field expansion",
-          "linearised Jacobian: far products, wall solve", "Newton: difference Jacobian",
+          "linearised point: displacements, inlet",
+          "linearised Jacobian: expansion (far pairs, near blocks)",
+          "linearised Jacobian: products, wall solve", "Newton: difference Jacobian",
           "Newton: directional update",
           "Newton: damped LM step", "Newton: Gauss-Newton promise",
           "level set-up (wall matrix + LU, breaks, area mode)", "seed (lubrication solve + fit)",
