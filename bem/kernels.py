@@ -842,7 +842,9 @@ def near_target_taylor(pairs, tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, tol,
 # --------------------------------------------------------------------------------------------
 @numba.njit(cache=True)
 def _legendre_values(t, P, D):
-    """P[n] = P_n(t) and D[n] = P_n'(t) for n < P.size (the recurrences of :func:`_curve_eval`)."""
+    """P[n] = P_n(t) and D[n] = P_n'(t) for n < P.size (the recurrences of :func:`_curve_eval`:
+    (n + 1) P_{n+1} = (2n + 1) t P_n - n P_{n-1} and P'_{n+1} = P'_{n-1} + (2n + 1) P_n,
+    Abramowitz & Stegun 22.7.10 and 22.8.5)."""
     p = P.shape[0]
     P[0] = 1.0
     D[0] = 0.0
