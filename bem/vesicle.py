@@ -233,6 +233,20 @@ Solver paths, before → after (each remaining one with its reason):
   78.8 s, but (0.6, 1.5) then stopped at 64 modes with estimates half its true errors
   (3.96e-6 against 7.38e-6 in V/U; ``default_cases.py``), and the benchmark (0.6, 1.94) in
   fresh processes took 62.6 s (1292 BIE solves) against 62.2 s.
+* the valley method's Jacobian prolonged from the level below, kept until a step stalls →
+  replaced by a difference Jacobian once five steps with it together reduce |F| by less
+  than 2 % (:data:`bem.newton.CRAWL_GAIN`; at (0.6, 1.94) its 48-mode level crawled 48 steps
+  of ratio 0.990–0.999 before its first difference Jacobian). It changes only the long
+  vesicles near lam_c started from carriers. Measured on 2 cores (BIE solves, modes, s):
+  (0.6, 1.94) 1486 → 1351 (88 → 96 modes; estimates 5.9e-5, 0.049, 4.8 → 2.0e-5, 0.026, 1.5
+  for V/U, Δp⁺, γ_max; 37.2 → 31.2 s); at Ca_B = 50.01 1224 → 1351 (88 → 96 modes; 7.6e-5,
+  0.020, 6.7 → 2.4e-5, 0.030, 1.9; 31.0 → 29.8 s, in another run 29.1 → 32.7 s); λ = 1.9399
+  1392 → 1381 (88 modes both; 35.2 → 34.1 s, 35.1 → 39.0 s); λ = 1.9401 1501 → 1484 and
+  (0.65, 0.98 λc) 1840 → 1821, not converged at 96 modes either way (estimates 1.4e-4 and
+  2.6e-3 relative in V/U). Over these five the BIE solves are about the same (7443 → 7388):
+  the gain at (0.6, 1.94) is mostly its path. The six other default cases, (0.6, 1.88),
+  (0.6, 1.7), (0.62, 0.97 λc) and (0.55, 0.96 λc) are bitwise unchanged (the rule does not
+  fire).
 * evaluations: one after the other → the points of a difference Jacobian and of a
   directional update evaluated concurrently, one per numba thread (:func:`_residuals`; the
   assembly serial on each thread, the products concurrent, the LAPACK calls under a lock);
