@@ -285,6 +285,24 @@ Solver paths, before → after (each remaining one with its reason):
   valley floor test above changed the paths).
 * continuation rungs: short vesicles near lam_c only (ℓ ≤ 5) → vesicles near lam_c up to
   ℓ = 9 (``RUNG_MAX_LENGTH``; longer ones from their own lubrication shape, measured above).
+  Measured and not adopted (yet): every long vesicle (ℓ > 5) near lam_c from its own
+  lubrication shape through carrier levels. At Ca_B = 50 (rungs → carriers; BIE solves,
+  modes or "not converged"): ℓ = 5.3 (0.8, 0.98 λc) 1286, not converged → 985, not converged
+  (Δp⁺ estimate 9.4e-4 → 1.3e-4 relative); 5.7 (0.78, 0.98 λc) 1315, not converged → 1084,
+  72; 6.2 (0.75, 0.97 λc) 964, not converged → 691, 64; 7.0 (0.72, 0.98 λc) 1290, not
+  converged → 1021, not converged (V/U 1.7e-3 → 2.7e-5); 7.0 (0.7, 0.92 λc) 372, 48 → 476,
+  56 (V/U estimate 6.4e-6 → 1.0e-7); 7.5 (0.7, 0.98 λc) 1386, not converged → 1010, 72;
+  8.0 (0.68, 0.97 λc) 1129, 64 → 719, 64; 8.4 (0.67, 0.98 λc) 1314, not converged → 1038,
+  72; 8.6 (0.66, 0.97 λc) 1086, 72 → 900, 64; 8.7 (0.65, 0.95 λc) 737, 64 → 626, 72
+  (residual 3.7e-4 → 3.7e-6); 9.0 (0.65, 0.98 λc) 1840, not converged → 1010, 80. Where
+  both converge the outputs agree within the larger estimate; the spurious minimum for
+  which (0.7, 0.95 λc) was given the rungs (residual 2.1e-2) no longer occurs (633 → 580 BIE
+  solves, 56 modes both, residual 3.9e-4 → 4.8e-5, Δp⁺ true error 8.1e-3 → 1.2e-4). Not
+  adopted because there the Δp⁺ estimate, 3.1e-5, falls below that true error: the error of
+  the 56-mode level is its Levenberg–Marquardt stop (the floor test's ``promise`` 1e-2), not
+  the modes (with ``promise`` 1e-4 on every level: error 3.0e-6, estimate 3.0e-4, 745 BIE
+  solves). The error estimate has no term for that stop yet (e.g. the outputs' change along
+  the final Gauss–Newton step, one more evaluation).
 * Levenberg–Marquardt: plain, or the valley variant for long vesicles (kept: the plain method
   stops on the valley's side, γ_max 799 instead of 932 at (0.6, 1.94), 64 modes); the
   prolonged Jacobian now serves both (before: plain only).
