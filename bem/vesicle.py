@@ -301,8 +301,8 @@ Solver paths, before → after (each remaining one with its reason):
   adopted because there the Δp⁺ estimate, 3.1e-5, falls below that true error: the error of
   the 56-mode level is its Levenberg–Marquardt stop (the floor test's ``promise`` 1e-2), not
   the modes (with ``promise`` 1e-4 on every level: error 3.0e-6, estimate 3.0e-4, 745 BIE
-  solves). The error estimate has no term for that stop yet (e.g. the outputs' change along
-  the final Gauss–Newton step, one more evaluation).
+  solves). The error estimate has no term for that stop yet; the outputs' change along the
+  Gauss–Newton step of the level's final Jacobian does not reveal it (Δp⁺ −2.5e-7 there).
 * Levenberg–Marquardt: plain, or the valley variant for long vesicles (kept: the plain method
   stops on the valley's side, γ_max 799 instead of 932 at (0.6, 1.94), 64 modes); the
   prolonged Jacobian now serves both (before: plain only).
