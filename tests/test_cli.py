@@ -22,6 +22,7 @@ import pytest
 from cli_helpers import strict_json
 
 from correlations.viscosity import relative_viscosity
+from lubrication.checks import OutOfRangeWarning
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -510,7 +511,9 @@ def test_viscosity_in_a_2um_tube_reports_no_tube_hematocrit(cli):
     obj = strict_json(out)
     assert code == 0 and obj["tube_hematocrit"] is None
     assert any("H_T > H_D" in w for w in obj["warnings"])
-    assert obj["eta_rel"] == pytest.approx(relative_viscosity(2.0, 0.45), rel=1e-12)
+    with pytest.warns(OutOfRangeWarning, match="diameter_um=2 outside"):
+        direct = relative_viscosity(2.0, 0.45)      # below the Pries et al. tubes: extrapolated
+    assert obj["eta_rel"] == pytest.approx(direct, rel=1e-12)
 
 
 def test_estimate_just_above_d_c_keeps_HT_below_HD(cli):
