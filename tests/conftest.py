@@ -18,6 +18,25 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 _RECORDS: dict = {}
 
 
+def pytest_report_header(config):
+    """The code paths the numbers come from, so that a run on another machine says which it
+    took: the CPU numba compiles for (NUMBA_CPU_NAME, or the host's) and the BLAS kernels
+    (OPENBLAS_CORETYPE selects them)."""
+    import llvmlite.binding
+    import numba
+    lines = [f"numba {numba.__version__} compiles for "
+             f"{numba.config.CPU_NAME or llvmlite.binding.get_host_cpu_name()}"]
+    try:
+        import numpy.linalg  # noqa: F401 (loads the BLAS libraries to inspect)
+        import scipy.linalg  # noqa: F401
+        from threadpoolctl import threadpool_info
+    except ImportError:
+        return lines
+    lines += [f"{lib['internal_api']} {lib['version']} kernels {lib.get('architecture')} "
+              f"({lib['prefix']})" for lib in threadpool_info() if lib["user_api"] == "blas"]
+    return lines
+
+
 def pytest_collection_modifyitems(items):
     """Mark the tests that record values for the report, so ``-m record`` selects them."""
     for item in items:

@@ -26,6 +26,8 @@ from bem.results import DROP_PROFILE_COLUMNS, DropResult
 from bem.shape import SpectralCurve, fit_curve, spheroid_curve
 from lubrication.checks import InvalidParameterError
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 # ------------------------------------------------------------------ lam = 0.8: references
 #: Regression values, lam = 0.8: Ca -> (V/U, dp+ R/(eta U)), 10 digits of our converged solution
 #: (solve_drop defaults: modes 24, 32, 40, ... until the refinement pair agrees to tol = 1e-5 and

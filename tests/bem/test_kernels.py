@@ -17,6 +17,8 @@ from bem import quadrature as Q
 from bem.geometry import sphere_curve
 from lubrication.checks import InvalidParameterError
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 # ---------------------------------------------------------------- elliptic integrals
 M1 = np.concatenate([10.0 ** np.linspace(-300, -1, 150), np.linspace(0.01, 1.0, 150)])
 

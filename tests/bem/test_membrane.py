@@ -21,6 +21,8 @@ from bem.membrane import (
 )
 from bem.shape import SpectralCurve, equidistributing_density, fit_curve, spheroid_curve
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 
 def _spheroid_closed_form(a, b):
     """Numerical functions H(t), K(t), Delta_s H(t) of the spheroid, derived symbolically."""

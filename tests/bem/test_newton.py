@@ -13,6 +13,8 @@ from scipy.optimize import least_squares
 from bem.newton import valley_levenberg_marquardt
 from lubrication.checks import InvalidParameterError
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 
 def _banana(z):
     """A curved (Rosenbrock) valley in (z0, z1), coupled weakly to four stiffer unknowns, with

@@ -9,6 +9,8 @@ from bem import kernels as K
 from bem import quadrature as Q
 from bem.geometry import sphere_curve
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 P = 16
 
 

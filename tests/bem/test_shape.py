@@ -21,6 +21,8 @@ from bem.shape import (
 )
 from lubrication.checks import InvalidParameterError
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 
 def _spheroid_error(curve, a, b, n=2001):
     """Largest relative curvature errors against the closed form, and the volume error."""

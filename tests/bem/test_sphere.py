@@ -14,6 +14,8 @@ from bem.results import SphereResult
 from bem.solve import solve_sphere, solve_sphere_mesh, sphere_drag
 from lubrication.checks import InvalidParameterError
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 
 def haberman_sayre_velocity(lam):
     """Free sphere in Poiseuille flow, V/U (U mean) from Haberman & Sayre (1958):

@@ -18,6 +18,8 @@ from correlations.cli import main
 from lubrication.checks import CannotPassError, InvalidParameterError
 from lubrication.geometry import critical_confinement
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 # (0.9, 1.0), Ca_B = 50: levels 16/24/32 modes (measured)
 #   residual 5.0e-3, 3.3e-4, 2.3e-5   (/~14 per +8 modes, spectral)
 #   V/U      1.2573307, 1.2574625, 1.2574636

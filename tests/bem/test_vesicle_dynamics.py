@@ -28,6 +28,8 @@ from bem.vesicle_dynamics import (
 )
 from lubrication.checks import InvalidParameterError
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 NU, LAM, CA_B = 0.98, 0.3, 50.0
 
 

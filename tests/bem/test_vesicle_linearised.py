@@ -9,6 +9,8 @@ import pytest
 
 from bem import kernels as K
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 
 def _stencil(x0, r0, x, r, axis, h):
     """Fourth-order central difference of the ring Stokeslet in x (axis 0) or r (axis 1) of the

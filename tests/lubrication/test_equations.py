@@ -22,6 +22,8 @@ from scipy.optimize import brentq
 from lubrication import equations as eq
 from lubrication.checks import InvalidParameterError
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 
 # --------------------------------------------------------------------------- references
 def _independent_flow(r, Q):

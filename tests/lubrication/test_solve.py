@@ -30,6 +30,8 @@ from lubrication.geometry import critical_length
 from lubrication.results import PROFILE_COLUMNS, LubricationResult
 from lubrication.solve import CONSTRAINT_TOL, FORCE_TOL, solve_lubrication, sweep_lubrication
 
+pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
+
 BRETHERTON = 0.643
 
 
