@@ -44,6 +44,7 @@ __all__ = [
     "NMAX",
     "PanelSet",
     "barycentric_weights",
+    "fit_log_rule",
     "gauss_legendre",
     "gauss_table",
     "influence",
@@ -142,8 +143,7 @@ def _graded_rule(sigma: float = 0.15, levels: int = 40, n: int = 30):
     return u.ravel(), (0.5 * (hi - lo)[:, None] * w).ravel()
 
 
-@cache
-def log_rule(n_basis: int = SELF_BASIS) -> tuple[np.ndarray, np.ndarray]:
+def fit_log_rule(n_basis: int) -> tuple[np.ndarray, np.ndarray]:
     r"""Positive rule (u_i, w_i) on [0, 1] exact for :math:`P_j(2u-1)` and :math:`P_j(2u-1)\ln u`,
     j < n_basis, with 2 n_basis nodes in [1e-8, 1].
 
@@ -151,6 +151,8 @@ def log_rule(n_basis: int = SELF_BASIS) -> tuple[np.ndarray, np.ndarray]:
     nodes as conditions exists) from the moments of :func:`_graded_rule`, with the conditions
     orthonormalised in that rule's inner product; nodes below 1e-8 are excluded so that no
     node of a self-panel rule rounds onto the target. The moments are matched to ~1.5e-15.
+    The fit's basis has condition ~5e16, so which nodes it keeps follows the rounding of
+    numpy's log and of LAPACK's QR: on other CPUs it returns another, equally exact rule.
     """
     from scipy.optimize import nnls
 
@@ -161,10 +163,24 @@ def log_rule(n_basis: int = SELF_BASIS) -> tuple[np.ndarray, np.ndarray]:
     keep = u > 1e-8
     z, _ = nnls((q.T / np.sqrt(w))[:, keep], q.T @ np.sqrt(w), maxiter=50 * n_basis)
     sel = np.nonzero(z)[0]
-    ur, wr = u[keep][sel], z[sel]
-    ur.flags.writeable = False
-    wr.flags.writeable = False
-    return ur, wr
+    return u[keep][sel], z[sel]
+
+
+@cache
+def log_rule(n_basis: int = SELF_BASIS) -> tuple[np.ndarray, np.ndarray]:
+    r"""The rule of :func:`fit_log_rule` (read-only arrays). For SELF_BASIS, the one the solver
+    uses, the stored table :mod:`bem._log_rule_table` (one fit, its smallest node 8.3e-6), so
+    that every CPU integrates with the same nodes: fitted afresh, a CPU whose numpy has no
+    AVX-512 keeps a node at 2e-8, where the kernel derivatives of the linearised Jacobian
+    lose digits to the rounding of the node's distance to the target."""
+    if n_basis == SELF_BASIS:
+        from ._log_rule_table import NODES, WEIGHTS
+        u, w = np.array(NODES), np.array(WEIGHTS)
+    else:
+        u, w = fit_log_rule(n_basis)
+    u.flags.writeable = False
+    w.flags.writeable = False
+    return u, w
 
 
 @cache
