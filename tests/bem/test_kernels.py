@@ -23,11 +23,19 @@ pytestmark = pytest.mark.numerics   # re-run on another code path by make test-p
 M1 = np.concatenate([10.0 ** np.linspace(-300, -1, 150), np.linspace(0.01, 1.0, 150)])
 
 
+#: Cephes' stated peak relative errors of ellpk and ellpe on [0, 1] are 2.5e-16 and 2.1e-16 (IEEE
+#: tests, Moshier's documentation); our m1 handling and log add two roundings: 2e-15 is four
+#: times their sum, the same compiled polynomial evaluated in another order by another compiler
+#: included
+CEPHES_RTOL = 2e-15
+
+
 def test_K_matches_scipy_ellipkm1_down_to_m1_1e_300(report):
     k = np.array([K.ellipk_m1(v) for v in M1])
     assert report.value("kern.K_scipy", np.max(np.abs(k / sp.ellipkm1(M1) - 1)), reference=0.0,
                         tol="2e-15 rel", kind="regression",
-                        source="scipy.special.ellipkm1 (the same Cephes approximation)") < 2e-15
+                        source="scipy.special.ellipkm1 (the same Cephes approximation)"
+                        ) < CEPHES_RTOL
 
 
 def test_E_matches_scipy_ellipe(report):
@@ -35,7 +43,8 @@ def test_E_matches_scipy_ellipe(report):
     e = np.array([K.ellipe_m1(v) for v in m1])
     assert report.value("kern.E_scipy", np.max(np.abs(e / sp.ellipe(1.0 - m1) - 1)),
                         reference=0.0, tol="2e-15 rel", kind="regression",
-                        source="scipy.special.ellipe (the same Cephes approximation)") < 2e-15
+                        source="scipy.special.ellipe (the same Cephes approximation)"
+                        ) < CEPHES_RTOL
 
 
 def test_K_E_match_mpmath_across_the_parameter_range(report):
@@ -50,7 +59,7 @@ def test_K_E_match_mpmath_across_the_parameter_range(report):
         k, e = K.ellipke_m1(float(m1))
         worst = max(worst, abs(k / k_ref - 1), abs(e / e_ref - 1))
     assert report.value("kern.KE_mpmath", worst, reference=0.0, tol="2e-15 rel",
-                        source="mpmath ellipk, ellipe at 40 digits") < 2e-15
+                        source="mpmath ellipk, ellipe at 40 digits") < CEPHES_RTOL
 
 
 # ---------------------------------------------------------------- ring Stokeslet
@@ -139,8 +148,9 @@ def test_trapezoid_and_elliptic_branches_agree_at_the_switch():
     xh = math.sqrt(s2 - (r + r0) ** 2)
     ell = np.array(K.ring_stokeslet(xh, r0, 0.0, r * (1 + 1e-9)))     # m slightly above 0.1
     trap = np.array(K.ring_stokeslet_phi(xh, r0, 0.0, r * (1 + 1e-9), 8))
-    # agreement relative to the largest component (M_rr is a small difference near m = 0.1)
-    assert np.max(np.abs(ell - trap)) < 1e-14 * np.max(np.abs(ell))
+    # agreement relative to the largest component to rounding: M_rr is a difference of terms
+    # ~1/m larger than itself near m = 0.1 in the elliptic form, each within a few ulp: 10 eps/m
+    assert np.max(np.abs(ell - trap)) < 10 * np.finfo(float).eps / 0.1 * np.max(np.abs(ell))
 
 
 # ---------------------------------------------------------------- panel quadrature

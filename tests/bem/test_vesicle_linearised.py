@@ -179,12 +179,13 @@ def test_near_panel_derivatives_match_differences_on_their_rule(state):
     (:func:`bem.kernels.near_panels_taylor`, the integrand differentiated on a fixed rule)
     against differences of the integrals on the same rule: central differences at steps
     h = 1e-4, 5e-5, 2.5e-5 along a random direction, Richardson-extrapolated twice
-    (truncation O(h^6), rounding ~30 eps |block| / h ~ 1e-11 of the largest derivative), for wall nodes near a
-    membrane panel and for membrane nodes near or on their own panel (the target then moves
-    with the panel node it is: the sum of both parts). Asserted within 1e-8 of the block's
-    largest derivative: the accuracy of the kernels' derivatives (central differences of step
-    1e-5 of the distance in each ring Stokeslet, truncation ~1e-10), checked to be ten times
-    above the reference's own error, estimated by its change from h/2 to h. The values are the
+    (truncation O(h^6), rounding ~30 eps |block| / h ~ 1e-11 of the largest derivative), for
+    wall nodes near a membrane panel and for membrane nodes near or on their own panel (the
+    target then moves with the panel node it is: the sum of both parts). Asserted within 1e-8
+    of the block's largest derivative, a hundred times the accuracy of the kernels' derivatives
+    (central differences of step 1e-5 of the distance in each ring Stokeslet, truncation
+    ~1e-10); the reference's own error, estimated by the change from one Richardson step to
+    two, is checked to be below a tenth of that. The values are the
     exact near blocks (re-planned, to 1e-13). The differences are taken on the rule, not
     re-planned for each moved panel: a re-planned rule jumps by its quadrature error (1e-14 of
     the integral) wherever the plan changes, which over a step h is noise of 1e-14/h."""

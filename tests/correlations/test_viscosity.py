@@ -164,13 +164,14 @@ def test_single_file_warns_above_8_um_and_rejects_negative_pressure_drop():
 # ------------------------------------------------------------------------------------------
 
 def test_in_vitro_limits_at_zero_and_reference_hematocrit(report):
+    """At H_D = 0.45 the law is 1 + (eta_0.45 - 1) x 1: two roundings, within 4 eps."""
     d = np.geomspace(3.3, 1978.0, 2001)
     assert np.all(viscosity_vitro_pries1992(d, 0.0) == 1.0)
     report.value("visc.limit_045", np.max(np.abs(viscosity_vitro_pries1992(d, 0.45)
                                                  / eta_045_vitro_pries1992(d) - 1)),
-                 reference=0.0, tol="1e-15 rel", source="Pries 1992 definition")
+                 reference=0.0, tol="4 eps rel", source="Pries 1992 definition")
     np.testing.assert_allclose(viscosity_vitro_pries1992(d, 0.45), eta_045_vitro_pries1992(d),
-                               rtol=1e-15, atol=0)
+                               rtol=4 * np.finfo(float).eps, atol=0)
 
 
 def test_in_vitro_tends_to_3_2_for_wide_tubes(report):
@@ -203,7 +204,11 @@ def test_shape_exponent_zero_is_near_8_05_um(report):
 
 @pytest.mark.parametrize("law", ["pries1992", "pries1994"])
 def test_exact_continuity_across_zero_of_shape_exponent(law, report):
-    """At D*, D* +- 1e-9, D* +- 1e-6 the value agrees with 50-digit arithmetic to ~1e-15."""
+    """At D*, D* +- 1e-9, D* +- 1e-6 the value agrees with 50-digit arithmetic to ROUNDING, the
+    rounding of its ~10 elementary operations, each within 4 ulp (numpy's accuracy tests,
+    numpy/_core/tests/test_umath_accuracy.py, hold its SIMD float64 exp and log, which differ
+    between CPUs, to a few ulp; libm's are within 1): 40 eps. No jump at D*: the second
+    difference across it is within four times that."""
     mp = pytest.importorskip("mpmath")
     mp.mp.dps = 50
     f = mp.mpf
@@ -223,6 +228,7 @@ def test_exact_continuity_across_zero_of_shape_exponent(law, report):
         g = (D / (D - f("1.1")))**2
         return (1 + (eta45 - 1) * ratio * g) * g
 
+    rounding = 40 * np.finfo(float).eps
     d_star = _root_of_C()
     offsets = [0.0, 1e-9, -1e-9, 1e-6, -1e-6]
     worst = 0.0
@@ -233,13 +239,13 @@ def test_exact_continuity_across_zero_of_shape_exponent(law, report):
                 warnings.simplefilter("ignore", OutOfRangeWarning)   # H_D > 0.9 extrapolates
                 got = relative_viscosity(d_star + off, HD, law=law)
             want = high_precision(d_star + off, HD)
-            assert abs(got - float(want)) <= 4e-15 * float(want), (HD, off, got, want)
+            assert abs(got - float(want)) <= rounding * float(want), (HD, off, got, want)
             worst = max(worst, abs(got - float(want)) / float(want))
             values.append(got)
         # no jump at D*: the steps D* - 1e-9 -> D* -> D* + 1e-9 are equal up to the curvature
         # term (|eta''| 1e-18, negligible) and round-off
-        assert abs((values[1] - values[0]) - (values[0] - values[2])) <= 4e-15 * values[0], values
-    report.value(f"visc.continuity_{law}", worst, reference=0.0, tol="4e-15 rel",
+        assert abs((values[1] - values[0]) - (values[0] - values[2])) <= 4 * rounding * values[0]
+    report.value(f"visc.continuity_{law}", worst, reference=0.0, tol="40 eps rel",
                  source="50-digit mpmath")
     # the same points as one array: no RuntimeWarning (0/0) leaks, result finite
     eta = relative_viscosity(d_star + np.array(offsets)[:, None], np.array([0.1, 0.9]), law=law)

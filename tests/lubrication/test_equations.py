@@ -192,19 +192,33 @@ def test_accuracy_against_40_digit_arithmetic(report):
 @pytest.mark.parametrize("k", [0.3, 0.6, 0.9, 0.99, 0.999])
 def test_free_rigid_long_cylinder(k, report):
     """A long rigid cylinder of radius k with zero net force: V/U = 2/(1 + k^2) exactly, and
-    the extra pressure drop per length dp+ R^2/(eta V L) = 4 k^4/(1 - k^2) (physics notes §3)."""
+    the extra pressure drop per length dp+ R^2/(eta V L) = 4 k^4/(1 - k^2) (physics notes §3).
+    dp+ is asserted to the accuracy the root Q carries: brentq's bracket (xtol + rtol |Q|)
+    plus the rounding of the force (4 eps times its terms, over dF/dQ), times |d dp+/dQ|
+    (~6/(1 - k)^3: 3e-9 of dp+ at k = 0.999), three times over, and at least 1e-11."""
     def net_force(Q):   # per unit length: pressure on the cross-section plus shear on the side
         return (-math.pi * k * k * eq.pressure_gradient(k, Q)
                 + 2 * math.pi * k * eq.membrane_shear_rate(k, Q))
+
+    def dp_plus_per_length(Q):
+        return -eq.pressure_gradient(k, Q) - 8 * (1 - Q)
+
     Q = brentq(net_force, -0.5, 0.99, xtol=1e-15, rtol=1e-15)
     closed = "physics notes §3, closed form"
     report.value(f"lub.cylinder_V_{k}", abs((1 / (1 - Q)) / (2 / (1 + k * k)) - 1),
                  reference=0.0, tol="1e-11 rel", source=closed)
     assert 1 / (1 - Q) == pytest.approx(2 / (1 + k * k), rel=1e-11)
-    dp_plus_per_length = -eq.pressure_gradient(k, Q) - 8 * (1 - Q)
-    report.value(f"lub.cylinder_dp_{k}", abs(dp_plus_per_length / (4 * k**4 / (1 - k * k)) - 1),
-                 reference=0.0, tol="1e-9 rel", source=closed)
-    assert dp_plus_per_length == pytest.approx(4 * k**4 / (1 - k * k), rel=1e-9)
+    h, eps = 1e-7, np.finfo(float).eps
+    terms = (abs(math.pi * k * k * eq.pressure_gradient(k, Q))
+             + abs(2 * math.pi * k * eq.membrane_shear_rate(k, Q)))
+    root_error = 1e-15 + 1e-15 * abs(Q) + 4 * eps * terms / abs(
+        (net_force(Q + h) - net_force(Q - h)) / (2 * h))
+    exact = 4 * k**4 / (1 - k * k)
+    rtol = max(1e-11, 3 * abs(dp_plus_per_length(Q + h) - dp_plus_per_length(Q - h)) / (2 * h)
+               * root_error / exact)
+    report.value(f"lub.cylinder_dp_{k}", abs(dp_plus_per_length(Q) / exact - 1),
+                 reference=0.0, tol=f"{rtol:.1g} rel", source=closed)
+    assert dp_plus_per_length(Q) == pytest.approx(exact, rel=rtol)
 
 
 # --------------------------------------------------------------------------- Ca, caps, RHS
