@@ -40,6 +40,11 @@ above tension_tol (its pair estimates 2.4e-4 in V/U, 0.5 % in dp+ meet the 5 % a
   delta^0.8 scaling holds), 0.300 (0.668), 0.748 (0.9); the bound at delta = 0.05 is 3.0 % at
   nu = 0.6 and 9.9 % at nu = 0.9, at delta = 0.02 1.5 % and 4.7 % (was 10 % everywhere).
 * ell: 2 x the largest measured difference, 1.03e-3 (was 1e-2).
+
+The differences are those of the two models; the BEM solves of the test are loose (tol 1e-2,
+5e-2 for long vesicles), so each bound on V/U and dp+ also takes the solve's own error estimate
+of that output (relative): a solver path that ends elsewhere within its estimate, on another
+CPU or after a change of the ladder, still passes, and one that ends outside it does not.
 """
 
 import numpy as np
@@ -120,8 +125,10 @@ def test_bem_agrees_with_lubrication_near_lam_c(nu, ratio):
     assert lub.success, lub.message
     speed, dp, ell = (res.V_over_U / lub.V_over_U - 1, res.dp_plus_R0 / lub.dp_plus_R0 - 1,
                       res.ell / lub.ell - 1)
-    assert abs(speed) <= _speed_tol(nu), (speed, _speed_tol(nu))
-    assert 0 < dp <= _dp_tol(nu, 1 - ratio), (dp, _dp_tol(nu, 1 - ratio))
+    own = {k: res.error_estimate[k] / abs(getattr(res, k)) for k in ("V_over_U", "dp_plus_R0")}
+    speed_tol, dp_tol = _speed_tol(nu) + own["V_over_U"], _dp_tol(nu, 1 - ratio) + own["dp_plus_R0"]
+    assert abs(speed) <= speed_tol, (speed, speed_tol)
+    assert 0 < dp <= dp_tol, (dp, dp_tol)
     assert abs(ell) <= _ell_tol(), (ell, _ell_tol())
     assert 0 < res.film_min < 1 - ratio
 
