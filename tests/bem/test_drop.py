@@ -378,8 +378,11 @@ def _convergence_study(ca, ns, base=None):
 @pytest.mark.ci
 def test_observed_order_ca_0p1(drop01, report):
     """Ca = 0.1, modes 12, 16, 24, 32 (panels n/3) against 40: residual 1.2e-3, 8e-5, 2e-6,
-    2.9e-8, 4.3e-10; overall observed order (12 -> 32) of the residual 15, of Δp⁺ 15, of V/U
-    ~9 (spectral: local orders grow, 8 -> 20; with 48 modes as well, 12 -> 40: 13, 16, 15)."""
+    2.9e-8, 4.3e-10; overall observed order (12 -> 32) of the residual 15, of Δp⁺ 13, of V/U
+    10 (spectral: local orders grow, 8 -> 20; with 48 modes as well, 12 -> 40: 13, 16, 15).
+    The outputs' order is that of their error envelope (the largest error at this or more
+    modes): a single level can sit at a sign change of its error (V/U at 12 modes, 2.7e-8,
+    below 1.9e-7 at 16)."""
     ns = np.array([12, 16, 24, 32, 40])
     outs = _convergence_study(0.1, ns, drop01)
     res = np.array([o["residual"] for o in outs])
@@ -389,6 +392,7 @@ def test_observed_order_ca_0p1(drop01, report):
     assert o_res > 10, (res, o_res)
     for key in ("V_over_U", "dp_plus_R"):
         e = np.array([abs(o[key] / outs[-1][key] - 1) for o in outs[:-1]])
+        e = np.maximum.accumulate(e[::-1])[::-1]           # the envelope from more modes
         o = math.log(e[0] / max(e[-1], 1e-15)) / math.log(ns[-2] / ns[0])
         report.value(f"drop.order_ca01_{key}", o, reference="spectral", tol="> 8",
                      source="modes 12 -> 32 against 40")
