@@ -43,6 +43,8 @@ from lubrication.checks import InvalidParameterError, check_positive, check_rang
 __all__ = ["SpectralCurve", "equidistributing_density", "film_density", "fit_curve",
            "spheroid_curvatures", "spheroid_curve"]
 
+#: Gauss nodes of each piece of the cumulative pole integrals (SpectralCurve._integrals)
+PIECE_NODES = 24
 
 @cache
 def _gauss01(m: int) -> tuple[np.ndarray, np.ndarray]:
@@ -194,8 +196,8 @@ class SpectralCurve:
         """(int_0^1 g cos phi dt, int_0^1 g sin phi dt), argument u t, at distances u.
 
         Cumulative integrals of the pieces' interpolating polynomials
-        (:func:`bem.series.pole_integrals`): pieces of 4 / ``quad`` in u with a 24-point Gauss
-        rule each, i.e. 3x the node density of one ``quad``-point rule over [0, 1/2] (an
+        (:func:`bem.series.pole_integrals`): pieces of 4 / ``quad`` in u with a
+        :data:`PIECE_NODES`-point Gauss rule each, i.e. 3x the node density of one ``quad``-point rule over [0, 1/2] (an
         interpolant needs about twice the nodes of a rule for the same error): round-off
         agreement with a 4x finer single rule per point (tests). Against the former 16-point
         rule per gap between neighbouring points, a curve's 256 panel nodes of one half cost
@@ -205,7 +207,7 @@ class SpectralCurve:
         u = np.asarray(u, dtype=float)
         flat = u.ravel()
         order = np.argsort(flat)
-        t, w = _gauss01(24)
+        t, w = _gauss01(PIECE_NODES)
         c, a = self._pole_coefficients(front)
         ic, is_ = series.pole_integrals(np.ascontiguousarray(c), np.ascontiguousarray(a),
                                         np.ascontiguousarray(flat[order]), t, w,

@@ -63,6 +63,8 @@ log = logging.getLogger(__name__)
 MAX_UNKNOWNS = 4000
 #: smallest a/R the BEM accepts at any tolerance (the small-sphere limit is exact below)
 LAM_MIN = 1e-3
+#: the meshed wall ends where the sphere's disturbance has decayed to this (wall_half_length)
+WALL_TOL = 1e-13
 #: absolute round-off of Δp⁺R/(ηU) between two meshes (measured 6e-17 to 7e-16, a/R 1e-3-0.05)
 _DP_ROUNDOFF = 4e-16
 
@@ -198,7 +200,7 @@ def solve_sphere_mesh(lam: float, n_panels: int, *, order: int = DEFAULT_ORDER,
                             reason="the sphere must fit inside the tube (a < R); below "
                                    f"a/R = {LAM_MIN:g} use small_sphere_limit"))
     if half_length is None:
-        half_length = wall_half_length(lam, 1e-13)
+        half_length = wall_half_length(lam, WALL_TOL)
     t0 = time.perf_counter()
     geom = sphere_in_tube(lam, n_panels, p=order, half_length=half_length)
     blocks = assemble_influence(geom, near=near, tol=quad_tol)
