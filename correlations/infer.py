@@ -79,6 +79,22 @@ MAX_STARTS = 4
 #: Longest Newton step (in ν or λ/λc) trusted as linear; beyond it the fit is repeated in full
 #: (half the map's grid spacing of 0.05 in ν, about that of λ/λc below 0.9).
 NEWTON_MAX_STEP = 0.025
+#: The map's own error in units of its error bar, for the posterior's likelihood: a mixture of
+#: two zero-mean Gaussians (weight, standard deviation in bars), fitted by maximum likelihood to
+#: the map's errors against 50 direct BEM solves off its nodes (V/U and ℓ pooled,
+#: docs/data/map_offgrid.json; tests/benchmarks/map_error_model.py): most errors are a tenth of
+#: the bar, a sixth of them reach a third of it. Its standard deviation is 0.17 bar.
+MAP_ERROR_MODEL = ((0.83, 0.10), (0.17, 0.35))
+#: Map evaluations the posterior may spend (about 0.3 ms each; shared among the Ca_B nodes
+#: when Ca_B is unknown).
+POSTERIOR_MAX_POINTS = 20000
+#: Draws of the posterior at which the outputs other than ν and λ are evaluated.
+POSTERIOR_OUTPUT_DRAWS = 200
+#: The data cannot separate ν from λ when the posterior correlation of ν and λ/λc is at least
+#: DEGENERATE_CORRELATION and ν's 95 % interval at least DEGENERATE_WIDTH wide (40 % of the
+#: map's spacing in ν).
+DEGENERATE_CORRELATION = 0.9
+DEGENERATE_WIDTH = 0.02
 #: Two fits are distinct when they differ by more than this in ν or in λ/λc.
 DISTINCT = 0.02
 #: Outputs of the map carried to the result (map key -> result key).
@@ -100,18 +116,23 @@ class Status(enum.Enum):
 
 @dataclass(frozen=True)
 class InferredValue:
-    """One inferred quantity: value (at the best fit), 1-σ uncertainty, and for sampling the
-    16/84 percentiles; ``unit`` as :data:`UNITS`."""
+    """One inferred quantity: value (at the best fit), 1-σ uncertainty (for the posterior half
+    the 68 % interval), the 68 % interval (posterior: the shortest; sampling: the 16/84
+    percentiles) and the posterior's shortest 95 % interval; ``unit`` as :data:`UNITS`."""
     value: float | None
     error: float | None
     unit: str
     low: float | None = None
     high: float | None = None
+    low95: float | None = None
+    high95: float | None = None
 
     def to_dict(self) -> dict:
         d = {"value": self.value, "error": self.error, "unit": self.unit}
         if self.low is not None:
-            d.update(p16=self.low, p84=self.high)
+            d.update(low68=self.low, high68=self.high)
+        if self.low95 is not None:
+            d.update(low95=self.low95, high95=self.high95)
         return d
 
 
@@ -291,6 +312,11 @@ def _outputs(m, nu, ratio, ca_of, diameter_um=None, scales_in=None) -> dict | No
 
 # --------------------------------------------------------------------------- the inference
 
+def _check_uncertainty(uncertainty: str) -> None:
+    if uncertainty not in ("posterior", "linear"):
+        raise InvalidParameterError("uncertainty", uncertainty, "'posterior' or 'linear'")
+
+
 def _check_inputs(values: dict) -> None:
     """Every value positive and finite; each error non-negative and finite."""
     for name, value in values.items():
@@ -302,11 +328,127 @@ def _check_inputs(values: dict) -> None:
             check_positive(name, value)
 
 
+def _posterior_quantities(m, target, sigma, ca_of, d, scales, centre, best, seed, ca_free):
+    """The posterior over the map's box (:func:`correlations.posterior.posterior`; with
+    ``ca_free`` also over its Ca_B nodes, log-uniform, :func:`correlations.posterior.mixture`)
+    and every output's value at the best fit with its posterior intervals: ν, λ/λc, λ (and
+    Ca_B) from the draws, the other outputs evaluated at :data:`POSTERIOR_OUTPUT_DRAWS` of
+    them. Returns (quantities, notes, method, posterior)."""
+    import time
+
+    from .posterior import mixture, nested_intervals, posterior
+
+    def model_at(ca):
+        def model(nu, ratio):
+            pair = _speed_length(m, nu, ratio, ca)
+            if pair is None:
+                return None
+            return tuple((v.value, v.error or 0.0) for v in pair)
+        return model
+
+    start = time.perf_counter()
+    box = (m.nus[0], m.nus[-1], m.ratios[0], m.ratios[-1])
+    if ca_free:
+        logs = np.log(m.cas)
+        share = np.gradient(logs) if len(logs) > 1 else np.ones(1)   # trapezoid in log Ca_B
+        # the evaluation budget of one posterior shared among the Ca_B nodes
+        budget = POSTERIOR_MAX_POINTS // len(m.cas)
+        parts = {c: posterior(model_at(lambda lam, c=c: c), target, sigma, box, seed=seed,
+                              error_model=MAP_ERROR_MODEL, max_points=budget) for c in m.cas}
+        post = mixture(parts, dict(zip(m.cas, share)), seed=seed)
+    else:
+        post = posterior(model_at(ca_of), target, sigma, box, seed=seed,
+                         error_model=MAP_ERROR_MODEL, max_points=POSTERIOR_MAX_POINTS)
+    if post.empty:
+        return None, [], "", post
+    n = min(POSTERIOR_OUTPUT_DRAWS, post.samples["nu"].size)
+    cas = post.samples.get("ca_b")
+    draws = [o for o in (_outputs(m, float(a), float(b),
+                                  ca_of if cas is None else (lambda lam, c=float(cas[i]): c),
+                                  d, scales)
+                         for i, (a, b) in enumerate(zip(post.samples["nu"][:n],
+                                                        post.samples["lam_ratio"][:n])))
+             if o is not None]
+    quantities, notes = {}, []
+    for k, (value, own) in centre.items():
+        if value is None:
+            continue
+        if k in post.samples:
+            vals = post.samples[k]
+        elif k == "delta":
+            vals = 1.0 - post.samples["lam_ratio"]
+        else:
+            vals = np.array([o[k][0] for o in draws if o.get(k, (None,))[0] is not None])
+        e = (own or 0.0) * math.sqrt(sum(w * c * c for w, c in MAP_ERROR_MODEL))
+        if vals.size < 2 or (vals.max() == vals.min() and e == 0.0):
+            quantities[k] = InferredValue(value, own, UNITS[k])
+            continue
+        # the value stays that of the best fit (one cell: its outputs are consistent with each
+        # other), which in a valley can lie near an edge of the intervals; the map's own error
+        # of an output (e, one standard deviation) adds to each interval's half-width in
+        # quadrature, once for 68 % and twice for 95 %
+        if k in post.intervals:
+            iv = post.intervals[k]
+        elif k == "delta":                       # those of lam/lam_c, the box's edge kept
+            iv = {lv: (1.0 - b, 1.0 - a) for lv, (a, b) in post.intervals["lam_ratio"].items()}
+        else:
+            iv = nested_intervals(vals)
+        bounds = []
+        for level, k_e in ((0.68, 1.0), (0.95, 2.0)):
+            lo, hi = iv[level]
+            half = math.hypot(0.5 * (hi - lo), k_e * e)
+            bounds += [0.5 * (lo + hi) - half, 0.5 * (lo + hi) + half]
+        quantities[k] = InferredValue(value, 0.5 * (bounds[1] - bounds[0]), UNITS[k], *bounds)
+    nu95, r95 = post.interval("nu", 0.95), post.interval("lam_ratio", 0.95)
+    if (abs(post.correlation) >= DEGENERATE_CORRELATION
+            and nu95[1] - nu95[0] >= DEGENERATE_WIDTH):
+        notes.append(
+            f"degenerate: nu between {nu95[0]:.3f} and {nu95[1]:.3f} (with lam/lam_c between "
+            f"{r95[0]:.3f} and {r95[1]:.3f}, correlation {post.correlation:.2f}) fits the data "
+            "(95 %): V/U and ell change together along this valley of the map, so they cannot "
+            "separate nu from lam" + _separating_measurement(draws, centre))
+    if len(post.branches) > 1:
+        notes.append("the consistent cells fall apart in branches: " + "; ".join(
+            f"{b.mass:.0%} at nu {b.nu[0]:.3f}-{b.nu[1]:.3f}, lam/lam_c {b.lam_ratio[0]:.3f}-"
+            f"{b.lam_ratio[1]:.3f}" for b in post.branches if b.mass >= 0.01))
+    if not post.resolved:
+        notes.append(f"the posterior was not resolved within {post.evaluations} map points: "
+                     "its intervals are approximate")
+    method = ("posterior over the whole map (flat prior in nu and lam/lam_c"
+              + (" and log Ca_B" if ca_free else "") + "; likelihood of V/U and ell: the "
+              "measurement's Gaussian with the map's own error, a mixture fitted to its errors "
+              f"off its nodes; {post.evaluations} map points, "
+              f"{time.perf_counter() - start:.1f} s): the value is the best fit's, the "
+              "intervals the shortest holding 68 % and 95 % of the posterior (outputs widened by "
+              "their map error), the error half the 68 % interval")
+    return quantities, notes, method, post
+
+
+def _separating_measurement(draws, centre) -> str:
+    """The sentence naming the measurable output that varies most across the consistent
+    cells, in units of the map's own error of it (empty when none varies by more than that)."""
+    best, name = 1.0, ""
+    for key, label in (("film", "the film thickness"), ("dp_plus_R0", "the extra pressure drop"),
+                       ("tension_max", "the maximum tension")):
+        vals = np.array([o[key][0] for o in draws if o.get(key, (None,))[0] is not None])
+        own = centre.get(key, (None, None))[1]
+        if vals.size < 2 or not own:
+            continue
+        lo, hi = np.quantile(vals, [0.025, 0.975])
+        if (hi - lo) / own > best:
+            best, name = (hi - lo) / own, (f"; measuring {label} would (it ranges over "
+                                          f"{lo:.4g}-{hi:.4g} across them, {(hi - lo) / own:.0f}"
+                                          " times the map's error there)")
+    return name
+
+
 def _run(m, measured: dict, errors: dict, derive, samples: int, seed: int,
-         assumptions: list) -> Inference:
+         assumptions: list, uncertainty: str = "posterior", ca_free: bool = False) -> Inference:
     """The fit and its uncertainty. ``derive(measured) -> (target, sigma, ca_of,
     diameter_um, scales)`` turns a set of measurements into the fit's targets, the function
-    λ -> Ca_B, and the inputs of the unit conversions (None, None: dimensionless only)."""
+    λ -> Ca_B, and the inputs of the unit conversions (None, None: dimensionless only).
+    ``ca_free``: Ca_B is not known; the fit takes ``ca_of``, the posterior integrates over the
+    map's Ca_B."""
     target, sigma, ca_of, d, scales = derive(measured)
     inputs = {"V_over_U": target[0], "V_over_U_err": sigma[0], "ell": target[1],
               "ell_err": sigma[1], **measured, **{f"{k}_err": v for k, v in errors.items()}}
@@ -363,6 +505,12 @@ def _run(m, measured: dict, errors: dict, derive, samples: int, seed: int,
         return _outputs(m, float(nu), float(ratio), c, dd, sc)
 
     keys = [k for k, (v, _) in centre.items() if v is not None]
+    if not samples and uncertainty == "posterior":
+        quantities, more, method, _ = _posterior_quantities(m, target, sigma, ca_of, d, scales,
+                                                            centre, best, seed, ca_free)
+        if quantities is None:          # no map point within reach (cannot happen after a fit)
+            uncertainty = "linear"
+        notes += more
     if samples:
         rng = np.random.default_rng(seed)
         draws, failed = [], 0
@@ -393,7 +541,7 @@ def _run(m, measured: dict, errors: dict, derive, samples: int, seed: int,
             p16, p84 = np.percentile(vals, [16, 84])
             quantities[k] = InferredValue(centre[k][0], float(math.hypot(np.std(vals), own)),
                                           UNITS[k], float(p16), float(p84))
-    else:
+    elif uncertainty == "linear":
         method = ("linearisation: each measurement and the map's V/U and ell errors moved by "
                   "+-1 sigma in turn, (nu, lam/lam_c) moved by one Newton step with the map's "
                   "Jacobian at the fit (central differences); contributions and the map's own "
@@ -427,7 +575,7 @@ def _run(m, measured: dict, errors: dict, derive, samples: int, seed: int,
                     var[q] += (scale * (a - b))**2
         quantities = {k: InferredValue(centre[k][0], float(math.sqrt(var[k])), UNITS[k])
                       for k in keys}
-    if len(good) > 1:
+    if len(good) > 1 and (samples or uncertainty == "linear"):
         # the data do not single out one vesicle: the largest distance from the best fit to
         # another acceptable fit is added in quadrature to every quantity (an error bar that
         # covers all the vesicles the data allow, not only the neighbourhood of one)
@@ -450,12 +598,14 @@ def _run(m, measured: dict, errors: dict, derive, samples: int, seed: int,
 
 def infer_map(V_over_U: float, ell: float, V_over_U_err: float | None = None,
               ell_err: float | None = None, ca_b: float = DEFAULT_CA_B, samples: int = 0,
-              seed: int = 0, solution_map=None) -> Inference:
+              seed: int = 0, solution_map=None, uncertainty: str = "posterior") -> Inference:
     r"""Infer (ν, λ) from the dimensionless speed V/U and length ℓ = L/R at a given Ca_B.
 
     The method of the module docstring: a bounded least-squares fit of the solution map's V/U
     and ℓ in (ν, λ/λc), weighted by measurement ⊕ map error, from several starts; uncertainty
-    by linearisation (``samples=0``) or by ``samples`` refitted Gaussian draws.
+    from the posterior over the whole map (``uncertainty="posterior"``, seconds), by
+    linearisation at the best fit (``"linear"``, fast, blind to valleys and branches) or by
+    ``samples`` refitted Gaussian draws.
 
     Parameters
     ----------
@@ -463,21 +613,27 @@ def infer_map(V_over_U: float, ell: float, V_over_U_err: float | None = None,
         Measured cell speed over the mean velocity and full axial length over R [-].
     V_over_U_err, ell_err : float, optional
         Their absolute 1-σ uncertainties [-] (default :data:`DEFAULT_RELATIVE_ERROR` × value).
-    ca_b : float
-        Bending capillary number ηUR0²/κ [-] (held fixed).
+    ca_b : float or None
+        Bending capillary number ηUR0²/κ [-] (held fixed); None: unknown, the fit takes
+        :data:`DEFAULT_CA_B` and the posterior integrates over the map's Ca_B (log-uniform).
     samples, seed : int
-        Number of draws (0: linearisation) and the seed of the draws.
+        Number of refitted draws (0: ``uncertainty`` decides) and the seed of the draws.
     solution_map : SolutionMap, str or Path, optional
         The map (default the shipped one).
+    uncertainty : {"posterior", "linear"}
+        How the uncertainty is found when ``samples`` is 0.
 
     Returns
     -------
     Inference
     """
     from .solution_map import SolutionMap, load_map
+    _check_uncertainty(uncertainty)
     errors = {"V_over_U": V_over_U_err, "ell": ell_err}
     _check_inputs({"V_over_U": V_over_U, "ell": ell, "ca_b": ca_b, "V_over_U_err": V_over_U_err,
                    "ell_err": ell_err})
+    ca_free = ca_b is None
+    ca_b = DEFAULT_CA_B if ca_free else ca_b
     errors = {k: DEFAULT_RELATIVE_ERROR * v if errors[k] is None else float(errors[k])
               for k, v in (("V_over_U", V_over_U), ("ell", ell))}
     m = solution_map if isinstance(solution_map, SolutionMap) else load_map(solution_map)
@@ -487,7 +643,9 @@ def infer_map(V_over_U: float, ell: float, V_over_U_err: float | None = None,
         return ((meas["V_over_U"], meas["ell"]), (errors["V_over_U"], errors["ell"]),
                 lambda lam: float(ca_b), None, None)
 
-    return _run(m, measured, errors, derive, samples, seed, [])
+    assumptions = ([f"Ca_B unknown: the best fit takes Ca_B = {DEFAULT_CA_B:g}, the posterior "
+                    "integrates over the map's Ca_B (log-uniform)"] if ca_free else [])
+    return _run(m, measured, errors, derive, samples, seed, assumptions, uncertainty, ca_free)
 
 
 def mean_velocity_from_gradient(dpdx_pa_m: float, diameter_um: float, eta_mpas: float,
@@ -517,7 +675,8 @@ def infer_cell(length_um: float, diameter_um: float, u_mm_s: float,
                length_err: float | None = None, diameter_err: float | None = None,
                u_err: float | None = None, v_err: float | None = None,
                eta_mpas: float | None = None, kappa_j: float | None = None,
-               samples: int = 0, seed: int = 0, solution_map=None) -> Inference:
+               samples: int = 0, seed: int = 0, solution_map=None,
+               uncertainty: str = "posterior") -> Inference:
     r"""Infer a cell (ν, λ, volume, area) and its film, Δp⁺ and tensions from V, L, d and U.
 
     Targets V/U = V/U (or the given V/U) and ℓ = 2L/d; the fit and the uncertainty are those of
@@ -536,6 +695,8 @@ def infer_cell(length_um: float, diameter_um: float, u_mm_s: float,
     eta_mpas, kappa_j : float, optional
         Suspending viscosity [mPa·s] and bending modulus [J]: Ca_B = ηUR0²/κ (both), Δp⁺ in Pa
         and tensions in mN/m (η). Without both, Ca_B = :data:`DEFAULT_CA_B` is assumed.
+    samples, seed, solution_map, uncertainty
+        As :func:`infer_map`.
 
     Returns
     -------
@@ -544,6 +705,7 @@ def infer_cell(length_um: float, diameter_um: float, u_mm_s: float,
         with η, ``dp_plus_Pa``, ``tension_max_mN_m``, ``tension_front_mN_m``.
     """
     from .solution_map import SolutionMap, load_map
+    _check_uncertainty(uncertainty)
     if (v_mm_s is None) == (v_over_u is None):
         raise InvalidParameterError("v_mm_s", v_mm_s, "exactly one of v_mm_s and v_over_u")
     b = PHYSICAL_BOUNDS
@@ -569,9 +731,13 @@ def infer_cell(length_um: float, diameter_um: float, u_mm_s: float,
               for k, e in given.items()}
     assumptions = [f"{k}_err = {DEFAULT_RELATIVE_ERROR:.0%} of the value (not given)"
                    for k, e in given.items() if e is None]
-    if eta_mpas is None or kappa_j is None:
-        assumptions.append(f"Ca_B = {DEFAULT_CA_B:g} (eta and kappa not both given; shapes "
-                           "change little for Ca_B >= 50, Chen et al. 2020)")
+    ca_free = eta_mpas is None or kappa_j is None
+    if ca_free:
+        assumptions.append(
+            f"Ca_B unknown (eta and kappa not both given): the best fit takes Ca_B = "
+            f"{DEFAULT_CA_B:g} (shapes change little for Ca_B >= 50, Chen et al. 2020)"
+            + (", the posterior integrates over the map's Ca_B (log-uniform)"
+               if uncertainty == "posterior" and not samples else ""))
     m = solution_map if isinstance(solution_map, SolutionMap) else load_map(solution_map)
 
     def derive(meas):
@@ -596,4 +762,4 @@ def infer_cell(length_um: float, diameter_um: float, u_mm_s: float,
                 return scale * lam**2
         return (vu, ell), (s_vu, s_ell), ca_of, d, (U, eta_mpas, kappa_j)
 
-    return _run(m, measured, errors, derive, samples, seed, assumptions)
+    return _run(m, measured, errors, derive, samples, seed, assumptions, uncertainty, ca_free)

@@ -30,7 +30,8 @@ ROWS = (("nu", "reduced volume nu"), ("lam", "confinement lam = R0/R"),
 
 
 def cmd_infer(args):
-    from lubrication.cli_contract import format_rows, format_value_error, options_named
+    from lubrication.cli_contract import (format_rows, format_value, format_value_error,
+                                          options_named)
 
     from lubrication.cli_contract import UsageError
 
@@ -48,19 +49,31 @@ def cmd_infer(args):
                        length_err=args.length_err, diameter_err=args.diameter_err,
                        u_err=u_err, v_err=args.v_err, eta_mpas=args.eta_mpas,
                        kappa_j=args.kappa_j, samples=args.samples or 0,
-                       solution_map=args.map)
+                       solution_map=args.map, uncertainty=args.uncertainty)
     out = {"command": "infer", "converged": True, **r.to_dict()}
     rows = []
     for key, label in ROWS:
         q = r.quantities.get(key)
         if q is not None:
-            rows.append((label, format_value_error(q.value, q.error), q.unit,
-                         "map fit", ""))
+            shown = (format_value_error(q.value, q.error) if q.low95 is None
+                     else format_value(q.value))
+            rows.append((label, shown, q.unit,
+                         "map fit", _intervals(q)))
     lines = [format_rows(rows, f"Inferred cell: {r.message}")] if rows else [r.message]
     lines += [f"fit residual chi = {r.fit.chi:.3g} combined standard deviations"
               if r.fit else "no fit", f"uncertainty: {r.method}"]
     lines += [f"assumption: {a}" for a in r.assumptions] + [f"note: {n}" for n in r.notes]
     return out, "\n".join(lines)
+
+
+def _intervals(q) -> str:
+    """The 68 % and 95 % intervals of an inferred value, where it has them."""
+    if q.low is None:
+        return ""
+    text = f"68 %: {q.low:.4g} to {q.high:.4g}"
+    if q.low95 is None:
+        return text
+    return f"posterior {text}; 95 %: {q.low95:.4g} to {q.high95:.4g}"
 
 
 def add_infer_parser(subparsers) -> None:
@@ -94,9 +107,13 @@ def add_infer_parser(subparsers) -> None:
         p.add_argument(f"--{name}-err", type=finite_float,
                        help=f"absolute 1-sigma uncertainty of {what} [{unit}] (default 2 %% of "
                             "the value)")
+    p.add_argument("--uncertainty", choices=("posterior", "linear"), default="posterior",
+                   help="posterior: the cells consistent with the data over the whole map, with "
+                        "68 %% and 95 %% intervals that follow valleys and branches (default; "
+                        "seconds); linear: linearisation at the best fit (under a second, blind "
+                        "to valleys)")
     p.add_argument("--samples", type=positive_int, metavar="N",
-                   help="propagate the uncertainty by N refitted Gaussian draws (default: "
-                        "linearisation, faster)")
+                   help="propagate the uncertainty by N refitted Gaussian draws instead")
     add_map_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=cmd_infer)
