@@ -328,7 +328,7 @@ def _check_inputs(values: dict) -> None:
             check_positive(name, value)
 
 
-def _posterior_quantities(m, target, sigma, ca_of, d, scales, centre, best, seed, ca_free):
+def _posterior_quantities(m, target, sigma, ca_of, d, scales, centre, seed, ca_free):
     """The posterior over the map's box (:func:`correlations.posterior.posterior`; with
     ``ca_free`` also over its Ca_B nodes, log-uniform, :func:`correlations.posterior.mixture`)
     and every output's value at the best fit with its posterior intervals: ν, λ/λc, λ (and
@@ -507,9 +507,11 @@ def _run(m, measured: dict, errors: dict, derive, samples: int, seed: int,
     keys = [k for k, (v, _) in centre.items() if v is not None]
     if not samples and uncertainty == "posterior":
         quantities, more, method, _ = _posterior_quantities(m, target, sigma, ca_of, d, scales,
-                                                            centre, best, seed, ca_free)
-        if quantities is None:          # no map point within reach (cannot happen after a fit)
+                                                            centre, seed, ca_free)
+        if quantities is None:
             uncertainty = "linear"
+            notes.append("no point of the map comes within reach of the data under the "
+                         "posterior's error model: the uncertainty is linearised instead")
         notes += more
     if samples:
         rng = np.random.default_rng(seed)

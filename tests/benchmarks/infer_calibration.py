@@ -101,7 +101,10 @@ def main(argv=None) -> int:
                   f"{entry['lam_0.95']:.0%}; {entry['inconsistent']} inconsistent; median "
                   f"{entry['median_s']:.2f} s, max {entry['max_s']:.2f} s per cell",
                   flush=True)
-    write_json(out, {"description": __doc__.splitlines()[0], "truth": args.truth,
+    truth = Path(args.truth).resolve()
+    write_json(out, {"description": __doc__.splitlines()[0],
+                     "truth": str(truth.relative_to(ROOT)) if truth.is_relative_to(ROOT)
+                     else str(truth),
                      "precisions": PRECISIONS, "methods": args.methods, "seed": SEED,
                      "coverage": table, "cases": cases, "provenance": provenance()},
                indent=1)
