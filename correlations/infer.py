@@ -85,6 +85,8 @@ NEWTON_MAX_STEP = 0.025
 #: docs/data/map_offgrid.json; tests/benchmarks/map_error_model.py): most errors are a tenth of
 #: the bar, a sixth of them reach a third of it. Its standard deviation is 0.17 bar.
 MAP_ERROR_MODEL = ((0.83, 0.10), (0.17, 0.35))
+#: The ways to find the uncertainty when no refitted draws are asked for.
+UNCERTAINTY_METHODS = ("posterior", "linear")
 #: Map evaluations the posterior may spend (about 0.3 ms each; shared among the Ca_B nodes
 #: when Ca_B is unknown).
 POSTERIOR_MAX_POINTS = 20000
@@ -313,8 +315,9 @@ def _outputs(m, nu, ratio, ca_of, diameter_um=None, scales_in=None) -> dict | No
 # --------------------------------------------------------------------------- the inference
 
 def _check_uncertainty(uncertainty: str) -> None:
-    if uncertainty not in ("posterior", "linear"):
-        raise InvalidParameterError("uncertainty", uncertainty, "'posterior' or 'linear'")
+    if uncertainty not in UNCERTAINTY_METHODS:
+        raise InvalidParameterError("uncertainty", uncertainty,
+                                    " or ".join(map(repr, UNCERTAINTY_METHODS)))
 
 
 def _check_inputs(values: dict) -> None:
@@ -370,6 +373,7 @@ def _posterior_quantities(m, target, sigma, ca_of, d, scales, centre, seed, ca_f
                                                         post.samples["lam_ratio"][:n])))
              if o is not None]
     quantities, notes = {}, []
+    own_sd = math.sqrt(sum(w * c * c for w, c in MAP_ERROR_MODEL))   # in map error bars
     for k, (value, own) in centre.items():
         if value is None:
             continue
@@ -379,7 +383,7 @@ def _posterior_quantities(m, target, sigma, ca_of, d, scales, centre, seed, ca_f
             vals = 1.0 - post.samples["lam_ratio"]
         else:
             vals = np.array([o[k][0] for o in draws if o.get(k, (None,))[0] is not None])
-        e = (own or 0.0) * math.sqrt(sum(w * c * c for w, c in MAP_ERROR_MODEL))
+        e = (own or 0.0) * own_sd
         if vals.size < 2 or (vals.max() == vals.min() and e == 0.0):
             quantities[k] = InferredValue(value, own, UNITS[k])
             continue
@@ -397,7 +401,8 @@ def _posterior_quantities(m, target, sigma, ca_of, d, scales, centre, seed, ca_f
         for level, k_e in ((0.68, 1.0), (0.95, 2.0)):
             lo, hi = iv[level]
             half = math.hypot(0.5 * (hi - lo), k_e * e)
-            bounds += [0.5 * (lo + hi) - half, 0.5 * (lo + hi) + half]
+            # without a map error the interval is kept as it is (the box's edge exactly)
+            bounds += [lo, hi] if e == 0.0 else [0.5 * (lo + hi) - half, 0.5 * (lo + hi) + half]
         quantities[k] = InferredValue(value, 0.5 * (bounds[1] - bounds[0]), UNITS[k], *bounds)
     nu95, r95 = post.interval("nu", 0.95), post.interval("lam_ratio", 0.95)
     if (abs(post.correlation) >= DEGENERATE_CORRELATION

@@ -19,8 +19,8 @@ whole box (:func:`posterior`): cells in (ν, x = √(1 − λ/λc)) (the map's o
 split in four while the data could be met inside them (the targets within the range of the
 cell's corners, widened by 4 s_k of the widest component and by a quarter of that range for
 curvature) and their corners do not yet resolve the likelihood (corners more than s_k of the
-narrowest component apart in V/U or ℓ). Work
-is bounded by ``max_points`` map evaluations; a posterior not resolved within them says so.
+narrowest component apart in V/U or ℓ). Work is bounded by ``max_points`` map evaluations;
+a posterior not resolved within them says so.
 
 Summaries (:class:`Posterior`): the shortest 68 % and 95 % intervals of ν, λ/λc and λ from
 draws of the cells by weight (shortest rather than central: a posterior piled against an edge
@@ -68,7 +68,8 @@ class Posterior:
     λ/λc; ``evaluations`` the map points evaluated; ``resolved`` False when ``max_points`` was
     reached before every cell that could hold the data resolved the likelihood; ``empty`` True
     when no point of the map comes within reach of the data; ``evidence`` the integral of the
-    likelihood over the box (for weighing posteriors at several Ca_B, :func:`mixture`)."""
+    likelihood over the box (for weighing posteriors at several Ca_B, :func:`mixture`);
+    ``edges`` the box's (low, high, finest cell width) in ν and in λ/λc."""
     samples: dict
     intervals: dict
     branches: tuple
@@ -181,13 +182,14 @@ def posterior(model, target, sigma, box, *, error_model=((1.0, 1.0),),
             todo += [(nu0, nm, x0, xm), (nm, nu1, x0, xm), (nu0, nm, xm, x1), (nm, nu1, xm, x1)]
         level += 1
 
-    like = np.array([[_likelihood(v, y, sig, error_model) for v in corners(cell)]
-                     for cell in leaves]).reshape(-1, 4)
+    values = [corners(cell) for cell in leaves]
+    like = np.array([[_likelihood(v, y, sig, error_model) for v in vs] for vs in values]
+                    ).reshape(-1, 4)
     cells = np.array(leaves).reshape(-1, 4)
     # a cell's mass: the mean of its valid corners' likelihoods (the integral of their
     # bilinear interpolant) times its area in (nu, lam/lam_c), 2 x dx dnu (the prior is flat in
     # lam/lam_c = 1 - x^2)
-    valid = np.array([[v is not None for v in corners(cell)] for cell in leaves]).reshape(-1, 4)
+    valid = np.array([[v is not None for v in vs] for vs in values]).reshape(-1, 4)
     mean = np.where(valid.any(axis=1), like.sum(axis=1) / np.maximum(valid.sum(axis=1), 1), 0.0)
     weights = mean * (cells[:, 1] - cells[:, 0]) * (cells[:, 3] - cells[:, 2]) * (
         cells[:, 2] + cells[:, 3])

@@ -30,7 +30,6 @@ ROOT = Path(__file__).resolve().parents[2]
 TRUTH = ROOT / "docs" / "data" / "infer_truth.json"
 OUT = ROOT / "docs" / "data" / "infer_calibration.json"
 PRECISIONS = (0.001, 0.02)
-METHODS = ("posterior", "linear")
 SEED = 11
 
 
@@ -72,6 +71,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--truth", default=str(TRUTH), help="truth file (default %(default)s)")
     ap.add_argument("--out", default=str(OUT), help="results file (default %(default)s)")
+    from correlations.infer import UNCERTAINTY_METHODS as METHODS
     ap.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS),
                     help="uncertainty methods to calibrate (default: all)")
     args = ap.parse_args(argv)
