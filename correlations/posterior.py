@@ -287,8 +287,10 @@ def _draw(cells, like, weights, n, rng):
 def _branches(cells, weights) -> tuple:
     """The connected parts of the 95 % highest-density region of the weighted cells, largest
     first: cells ranked by density, the densest holding 95 % of the mass kept, and kept cells
-    that touch (share a stretch of edge or a corner) joined."""
-    density = weights / ((cells[:, 1] - cells[:, 0]) * (cells[:, 3] - cells[:, 2]))
+    that touch (share a stretch of edge or a corner) joined. The density is per area of
+    (ν, λ/λc), where the prior is flat: a cell's weight over dν·d(λ/λc) = 2x dν dx."""
+    density = weights / ((cells[:, 1] - cells[:, 0]) * (cells[:, 3] - cells[:, 2])
+                         * (cells[:, 2] + cells[:, 3]))
     order = np.argsort(density)[::-1]
     keep = order[:int(np.searchsorted(np.cumsum(weights[order]), 0.95)) + 1]
     kept = cells[keep]
