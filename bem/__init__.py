@@ -8,9 +8,9 @@ sphere), :mod:`bem.drop` (clean drop: direct Newton steady state, time relaxatio
 :mod:`bem.membrane` (bending and tension forces), :mod:`bem.newton` (Levenberg–Marquardt with
 Broyden updates, shared by drop and vesicle), :mod:`bem.vesicle` (steady vesicle),
 :mod:`bem.vesicle_dynamics` (time integration of a vesicle), :mod:`bem.sweep` (vesicle sweeps
-over the confinement by continuation),
-:mod:`bem.results` (result dataclasses), :mod:`bem.plotting`, :mod:`bem.cli`. Units:
-R = eta = U = 1.
+over the confinement by continuation), :mod:`bem.results` (result dataclasses),
+:mod:`bem.plotting`; the ``vesicle-tube bem`` commands are in :mod:`correlations.cli.bem`.
+Units: R = eta = U = 1.
 
 Public entry points: :func:`bem.solve.solve_sphere`, :func:`bem.solve.sphere_drag`,
 :func:`bem.drop.solve_drop`, :func:`bem.vesicle.solve_vesicle`, :func:`bem.sweep.sweep_vesicle`

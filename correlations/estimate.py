@@ -38,12 +38,12 @@ import numpy as np
 
 from lubrication.checks import (CannotPassError, InvalidParameterError, OutOfRangeWarning,
                                 check_choice, check_fraction, check_positive, check_range)
-from lubrication.cli_contract import format_value_error
 from lubrication.io import provenance
 from lubrication.geometry import (cell_from_volume_area, check_passes, check_reduced_volume,
                                   critical_diameter_um,
                                   critical_length, critical_length_um)
 
+from .formatting import format_value_error
 from .registry import (BEM_DEFAULT_CA_B, LUBRICATION_DEFAULT_CA_B, MAP, MAP_DEFAULT_CA_B, METHODS,
                        QUANTITIES, SOLVER_COST, SOLVERS, Answer, MethodNotApplicable,
                        SolverNotConverged, check_output)

@@ -215,7 +215,7 @@ def test_failed_drop_prints_and_saves_no_numbers(cli, tmp_path):
 
 
 def test_vesicle_sweep_table_has_one_labelled_row_per_point():
-    from bem.cli import _sweep_text
+    from correlations.cli.bem import _sweep_text
     table = [{"lam": 0.5, "lam_ratio": 0.4, "V_over_U": 1.8, "dp_plus_R0": 0.3, "film_min": 0.4,
               "ell": 1.1, "shape_class": "bullet", "runtime": 3.0, "converged": True,
               "message": "converged"},

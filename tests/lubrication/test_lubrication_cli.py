@@ -41,7 +41,7 @@ def test_single_point_json_contract(capsys, tmp_path):
 
 
 def _table(text):
-    """{quantity: [cells]} of a fixed-width table of cli_contract.format_rows (column edges
+    """{quantity: [cells]} of a fixed-width table of correlations.cli.contract.format_rows (column edges
     from its line of dashes); repeated quantities get a list of rows."""
     lines = text.splitlines()
     k = next(i for i, l in enumerate(lines) if l.startswith("---"))
@@ -308,7 +308,7 @@ def test_sweep_table_has_one_column_per_quantity(cli):
 
 def test_default_sweep_starts_where_the_model_has_solutions():
     """The default --from of the high-Ca model is just above its branch end, and 0.5 else."""
-    from lubrication.cli import _sweep_ratios
+    from correlations.cli.lubrication import _sweep_ratios
     args = argparse.Namespace(nu=0.9, ca_b=math.inf, ratio_from=None, ratio_to=None, points=None)
     assert _sweep_ratios(args)[1:] == (0.61, 0.999, 50)
     args.ca_b = 50.0

@@ -1,7 +1,7 @@
 """Probe campaign: every command of ``vesicle-tube`` fed unusual and invalid inputs.
 
 Runs each probe as a separate process (the installed console script) with a wall-time bound
-(60 s by default), and checks the command-line contract of :mod:`lubrication.cli_contract`:
+(60 s by default), and checks the command-line contract of :mod:`correlations.cli.contract`:
 
 * exit 0: finite numbers only (strict JSON with ``--json``; no ``nan``/``inf`` in a table);
 * exit 2: exactly one line on stderr, naming an option or parameter, nothing on stdout;
@@ -374,7 +374,7 @@ def main(argv=None) -> int:
                                                                  key=lambda c: (c is None, c))}
     lines = ["# Probe campaign of the command line", "",
              "Written by `python tests/robustness/probe_campaign.py` (the contract is in "
-             "`lubrication/cli_contract.py`). Each probe is one process, bounded at "
+             "`correlations/cli/contract.py`). Each probe is one process, bounded at "
              f"{a.timeout:g} s; {a.workers} ran at a time on this machine ({os.cpu_count()} "
              f"cores); the campaign took {wall:.0f} s.", "", "| count | value |", "|---|---|"]
     lines += [f"| {k} | {v} |" for k, v in counts.items()]

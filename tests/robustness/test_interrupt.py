@@ -1,4 +1,4 @@
-"""Ctrl-C and a closed pipe end every long command quietly (lubrication/cli_contract.py).
+"""Ctrl-C and a closed pipe end every long command quietly (correlations/cli/contract.py).
 
 Each long command runs as its own process (the installed console script). After it has been
 working for a while it gets SIGINT, as a terminal's Ctrl-C sends it; it must exit with status
@@ -145,7 +145,7 @@ def test_an_interrupt_inside_numba_code_is_an_interrupt(monkeypatch, capsys):
     test above): the command still ends with the one interrupt line and exit 130; any other
     SystemError propagates."""
     import correlations.cli as cli
-    from lubrication.cli_contract import EXIT_INTERRUPTED
+    from correlations.cli.contract import EXIT_INTERRUPTED
 
     def numba_like(args):
         try:

@@ -1,6 +1,6 @@
 """``vesicle-tube map build | pack | query``: the solution map on the command line.
 
-Follows :mod:`lubrication.cli_contract` (table or ``--json``; exit 0 ok, 2 invalid input with one
+Follows :mod:`correlations.cli.contract` (table or ``--json``; exit 0 ok, 2 invalid input with one
 line naming the option or file, 130 interrupted). Light at start: the solvers, numpy and Dask
 load only inside the commands that use them.
 """
@@ -22,7 +22,7 @@ UNITS = {"V_over_U": "-", "dp_plus_R0": "eta U/R0", "ell": "R", "film_min": "R",
 
 
 def _named(args, **renamed):
-    from lubrication.cli_contract import options_named
+    from correlations.cli.contract import options_named
     return options_named({**OPTIONS, **renamed}, args)
 
 
@@ -34,10 +34,10 @@ def _progress(state) -> None:
 
 
 def cmd_map_build(args):
-    from lubrication.cli_contract import EXIT_INTERRUPTED, format_rows, is_interrupt
+    from correlations.cli.contract import EXIT_INTERRUPTED, format_rows, is_interrupt
 
-    from .map_build import build_map, make_grid
-    from .solution_map import read_points
+    from correlations.map_build import build_map, make_grid
+    from correlations.solution_map import read_points
     grid_given = any(v is not None for v in (args.nu, args.lam_ratio, args.lam_ratio_bem,
                                              args.lam_ratio_lubrication, args.ca_b, args.methods))
     with _named(args):
@@ -45,7 +45,7 @@ def cmd_map_build(args):
         if grid_given:
             ratios = args.lam_ratio
             if args.lam_ratio_bem is not None or args.lam_ratio_lubrication is not None:
-                from .map_build import DEFAULT_GRID
+                from correlations.map_build import DEFAULT_GRID
                 ratios = {m: (given if given is not None else
                               (args.lam_ratio or DEFAULT_GRID["lam_ratio"][m]))
                           for m, given in (("bem", args.lam_ratio_bem),
@@ -138,9 +138,9 @@ def coverage(data: dict) -> str:
 def cmd_map_pack(args):
     from pathlib import Path
 
-    from lubrication.cli_contract import UsageError, check_output_dir
+    from correlations.cli.contract import UsageError, check_output_dir
 
-    from .solution_map import pack_map
+    from correlations.solution_map import pack_map
     target = args.pack_out
     if target is not None:
         if Path(target).is_dir():
@@ -159,17 +159,17 @@ def cmd_map_pack(args):
     out = {"command": "map pack", "converged": True, "map": str(path),
            "points": len(data["columns"]["nu"]), "holes": len(data["holes"]),
            "bytes": path.stat().st_size, "coverage": coverage_summary(data)}
-    from lubrication.cli_contract import format_rows
+    from correlations.cli.contract import format_rows
     rows = [(k, out[k], "", "", "") for k in ("map", "points", "holes", "bytes")]
     return out, format_rows(rows, f"Packed {args.folder}") + "\n\n" + coverage(data)
 
 
 def cmd_map_query(args):
     from lubrication.checks import check_positive, check_range
-    from lubrication.cli_contract import UsageError, format_rows, format_value
+    from correlations.cli.contract import UsageError, format_rows, format_value
     from lubrication.geometry import critical_confinement
 
-    from .solution_map import load_map, outside_reason, query_map
+    from correlations.solution_map import load_map, outside_reason, query_map
     if (args.lam is None) == (args.lam_ratio is None):
         raise UsageError("give exactly one of --lam LAM, --lam-ratio RATIO")
     with _named(args, lam_ratio="--lam" if args.lam is not None else "--lam-ratio"):
@@ -215,9 +215,9 @@ def cmd_map_query(args):
 
 def add_map_parser(subparsers) -> None:
     """Add ``map build``, ``map pack`` and ``map query`` to the subcommands."""
-    from lubrication.cli_contract import Parser, finite_float, positive_int
+    from correlations.cli.contract import Parser, finite_float, positive_int
 
-    from lubrication.cli_contract import add_map_option
+    from correlations.cli.contract import add_map_option
 
     p = subparsers.add_parser("map", help="precomputed solution map: build, pack, query")
     sub = p.add_subparsers(dest="map_command", required=True, parser_class=Parser)

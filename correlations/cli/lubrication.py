@@ -1,6 +1,6 @@
 """``vesicle-tube lubrication``: one steady solution or a sweep over lam/lam_c.
 
-Follows the CLI contract of :mod:`lubrication.cli_contract` (table or ``--json``; exit 0 ok, 2
+Follows the CLI contract of :mod:`correlations.cli.contract` (table or ``--json``; exit 0 ok, 2
 invalid input, 1 not converged or out of time, with the JSON still printed and every physical
 value of a failed solve null). Every option is checked before any solve, and the messages name
 the option as it was typed (``--lam-ratio``, not the library's ``lam_ratio``): the lubrication
@@ -23,7 +23,7 @@ import math
 from pathlib import Path
 
 from lubrication.checks import InvalidParameterError, check_positive
-from lubrication.cli_contract import (UsageError, add_max_time_option, finite_float, format_rows,
+from correlations.cli.contract import (UsageError, add_max_time_option, finite_float, format_rows,
                                       format_value, positive_int)
 from lubrication.io import atomic_write, clean_json
 
@@ -146,7 +146,7 @@ def cmd_lubrication(args):
         raise UsageError(f"{', '.join(given)} go(es) with --sweep")
     if args.lam is None and args.lam_ratio is None:
         raise UsageError("give --lam LAM or --lam-ratio R (or --sweep)")
-    from .solve import check_inputs, solve_lubrication
+    from lubrication.solve import check_inputs, solve_lubrication
     check_inputs(args.nu, args.lam, args.lam_ratio, args.ca_b, names=OPTION_NAMES)
     max_time = _check_max_time(args)
     res = solve_lubrication(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
@@ -159,8 +159,8 @@ def cmd_lubrication(args):
             notes.append("not converged: only the JSON was written (no profiles)")
     if args.plot:
         if res.success:
-            from lubrication.cli_contract import save_plot
-            from .plotting import plot_shape
+            from correlations.cli.contract import save_plot
+            from lubrication.plotting import plot_shape
             save_plot(plot_shape(res), args.plot)
         else:
             notes.append(f"not converged: no figure written to {args.plot}")
@@ -191,7 +191,7 @@ def _single_rows(out: dict, success: bool) -> list:
 # --------------------------------------------------------------------------- sweep
 def _sweep_ratios(args):
     """Checked (from, to, points) of a sweep; the defaults follow the model's range."""
-    from .solve import MAX_SWEEP_POINTS, check_inputs, lowest_lam_ratio
+    from lubrication.solve import MAX_SWEEP_POINTS, check_inputs, lowest_lam_ratio
     nu = check_inputs(args.nu, lam_ratio=SWEEP_TO, ca_b=args.ca_b, names=OPTION_NAMES)[0]
     ratio_from, ratio_to = args.ratio_from, args.ratio_to
     if ratio_from is None:
@@ -218,7 +218,7 @@ def _sweep_ratios(args):
 def _sweep(args):
     import numpy as np
 
-    from .solve import sweep_lubrication
+    from lubrication.solve import sweep_lubrication
     nu, ratio_from, ratio_to, points = _sweep_ratios(args)
     max_time = _check_max_time(args)
     ratios = np.linspace(ratio_from, ratio_to, points)
@@ -245,8 +245,8 @@ def _sweep(args):
         out["files"] = [str(_write_sweep_csv(Path(args.out), results, table))]
     if args.plot:
         if n_ok:
-            from lubrication.cli_contract import save_plot
-            from .plotting import plot_sweep
+            from correlations.cli.contract import save_plot
+            from lubrication.plotting import plot_sweep
             save_plot(plot_sweep(results), args.plot)
         else:
             notes.append(f"no point converged: no figure written to {args.plot}")

@@ -1,7 +1,7 @@
 """``vesicle-tube figures --out DIR``: the quantitative figures of Chen et al. (2020) regenerated
 from our solvers and solution map, with the paper's statements checked.
 
-Follows :mod:`lubrication.cli_contract`: a table (one line per figure) or ``--json``; exit 0
+Follows :mod:`correlations.cli.contract`: a table (one line per figure) or ``--json``; exit 0
 when the figures were written (disagreements with the paper are results, not errors), 2 for
 bad input (``--out``, ``--format``, ``--only``, checked before any work), 130 on Ctrl-C (the
 figures, cache files and solves finished before it are complete and kept). Writes
@@ -27,11 +27,11 @@ def _progress(text: str) -> None:
 
 
 def cmd_figures(args):
-    from lubrication.cli_contract import options_named
+    from correlations.cli.contract import options_named
     from lubrication.io import atomic_write, provenance, write_json
 
-    from .figures import FIGURES, FigureContext, make_figure, render_markdown
-    from lubrication.cli_contract import UsageError
+    from correlations.figures import FIGURES, FigureContext, make_figure, render_markdown
+    from correlations.cli.contract import UsageError
     if not args.bem_max_time > 0:
         raise UsageError(f"--bem-max-time {args.bem_max_time:g}: must be > 0 [s]")
     names = list(dict.fromkeys(args.only or FIGURES))
@@ -81,10 +81,10 @@ def cmd_figures(args):
 
 def add_figures_parser(subparsers) -> None:
     """Add ``figures`` to the subcommands."""
-    from lubrication.cli_contract import finite_float
+    from correlations.cli.contract import finite_float
 
-    from lubrication.cli_contract import add_map_option
-    from .figures import FIGURES
+    from correlations.cli.contract import add_map_option
+    from correlations.figures import FIGURES
     p = subparsers.add_parser(
         "figures", help="regenerate the figures of Chen et al. (2020) from our solvers and "
                         "solution map and check the paper's statements")

@@ -1,7 +1,7 @@
 """``vesicle-tube infer``: a cell's reduced volume, size, film, Δp⁺ and tension from its
 measured speed and length in a tube (:mod:`correlations.infer`).
 
-Follows :mod:`lubrication.cli_contract`: a table or ``--json``; exit 0 when a steady vesicle of
+Follows :mod:`correlations.cli.contract`: a table or ``--json``; exit 0 when a steady vesicle of
 the solution map matches the data, 1 when none does (the verdict and the residual on stderr),
 2 for bad input (one line naming the option, its value and the valid range, before any work),
 130 on Ctrl-C. Light at start: scipy and the map load only inside the command.
@@ -30,12 +30,12 @@ ROWS = (("nu", "reduced volume nu"), ("lam", "confinement lam = R0/R"),
 
 
 def cmd_infer(args):
-    from lubrication.cli_contract import (format_rows, format_value, format_value_error,
+    from correlations.cli.contract import (format_rows, format_value, format_value_error,
                                           options_named)
 
-    from lubrication.cli_contract import UsageError
+    from correlations.cli.contract import UsageError
 
-    from .infer import infer_cell, mean_velocity_from_gradient
+    from correlations.infer import infer_cell, mean_velocity_from_gradient
     with options_named(OPTIONS, args):
         u_mm_s, u_err = args.u_mm_s, args.u_err
         if args.dpdx_pa_m is not None:
@@ -78,9 +78,9 @@ def _intervals(q) -> str:
 
 def add_infer_parser(subparsers) -> None:
     """Add ``infer`` to the subcommands."""
-    from lubrication.cli_contract import finite_float, positive_int
+    from correlations.cli.contract import finite_float, positive_int
 
-    from lubrication.cli_contract import add_map_option
+    from correlations.cli.contract import add_map_option
     p = subparsers.add_parser(
         "infer", help="infer a cell (nu, lam, volume, area, film, dp+, tension) from its "
                       "measured speed and length in a tube, with uncertainties")

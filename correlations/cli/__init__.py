@@ -1,6 +1,6 @@
 """The ``vesicle-tube`` command line.
 
-Every command follows the contract of :mod:`lubrication.cli_contract` (table or strict JSON;
+Every command follows the contract of :mod:`correlations.cli.contract` (table or strict JSON;
 exit 0 ok, 2 invalid input, 1 not converged, 130 interrupted). Out-of-range warnings go to
 stderr, one line each, and into the JSON under ``"warnings"``; the files a command wrote are
 named on stderr.
@@ -17,7 +17,7 @@ import warnings
 
 from lubrication.checks import (InvalidParameterError, OutOfRangeWarning, check_fraction,
                                 check_positive, check_range)
-from lubrication.cli_contract import (EXIT_CHECK_FAILED, EXIT_INTERRUPTED, EXIT_INVALID,
+from correlations.cli.contract import (EXIT_CHECK_FAILED, EXIT_INTERRUPTED, EXIT_INVALID,
                                       EXIT_NOT_CONVERGED, EXIT_OK,
                                       Parser, UsageError, check_output_dir, check_plot_path,
                                       check_report_path,
@@ -72,7 +72,7 @@ OPTIONS = {
 
 
 def _options(args, **renamed):
-    """:func:`lubrication.cli_contract.options_named` with this module's :data:`OPTIONS`
+    """:func:`correlations.cli.contract.options_named` with this module's :data:`OPTIONS`
     (``renamed``: further parameter names, e.g. ``tube_hematocrit="--hematocrit"``)."""
     return options_named({**OPTIONS, **renamed}, args)
 
@@ -108,7 +108,7 @@ def _unphysical(quantity: str, value) -> str:
 def cmd_geometry(args) -> dict:
     from lubrication import geometry as g
 
-    from .estimate import PHYSICAL_BOUNDS
+    from correlations.estimate import PHYSICAL_BOUNDS
     if args.nu is not None and (args.volume_fl is not None or args.area_um2 is not None):
         raise UsageError("give either --nu or --volume-fl/--area-um2, not both")
     with _options(args):
@@ -148,7 +148,7 @@ def cmd_geometry(args) -> dict:
 
 
 def cmd_estimate(args) -> dict:
-    from .estimate import estimate, estimate_dimensionless
+    from correlations.estimate import estimate, estimate_dimensionless
     physical = any(getattr(args, k) is not None for k in
                    ("volume_fl", "area_um2", "diameter_um", "velocity_mm_s",
                     "plasma_viscosity_mpas", "bending_modulus_j"))
@@ -178,7 +178,7 @@ def cmd_estimate(args) -> dict:
                  f"{i['diameter_um']:g} um tube; U = {i['velocity_mm_s']:g} mm/s, eta = "
                  f"{i['plasma_viscosity_mpas']:g} mPa s, kappa = {i['bending_modulus_j']:g} J")
     out = est.to_dict()
-    from .registry import QUANTITIES
+    from correlations.registry import QUANTITIES
     why = [f"  {k}: {est.quantities[k].note}" for k in QUANTITIES
            if est.quantities[k].value is None and est.quantities[k].note.startswith("no valid")]
     human = "\n".join([format_rows(_quantity_rows(est.quantities, ESTIMATE_ROWS), title),
@@ -187,13 +187,13 @@ def cmd_estimate(args) -> dict:
                       (["why no value:"] + why if why else []) +
                       ["methods and validity ranges: correlations/registry.py, docs/user-guide.md"])
     if args.plot:
-        from .plotting import plot_estimate
+        from correlations.plotting import plot_estimate
         save_plot(plot_estimate(est), args.plot)
     return out, human
 
 
 def cmd_viscosity(args) -> dict:
-    from . import viscosity as v
+    from correlations import viscosity as v
     law = args.law
     d, h, kind = args.diameter_um, args.hematocrit, args.hematocrit_kind
     if law == "single-file":
@@ -231,7 +231,7 @@ def cmd_viscosity(args) -> dict:
              "" if h_t is not None else "Fahraeus fit not meaningful here"),
             (LABELS["eta_rel"], eta, "-", law, "" if eta is not None else "rejected")]
     if args.plot:
-        from .plotting import plot_relative_viscosity
+        from correlations.plotting import plot_relative_viscosity
         save_plot(plot_relative_viscosity(hematocrits=(h_d,)), args.plot)
     return out, format_rows(rows, f"Relative apparent viscosity ({law})") + "\n" + UNIT_CONVENTION
 
@@ -243,8 +243,8 @@ def _single_file_viscosity(args) -> dict:
     reason (or a flagged extrapolation with --extrapolate), never another law's number. The
     law's diameter range is its stored validity range, viscosity.CHEN2020_RANGE.
     """
-    from .estimate import estimate
-    from .viscosity import CHEN2020_RANGE, viscosity_single_file_chen2020
+    from correlations.estimate import estimate
+    from correlations.viscosity import CHEN2020_RANGE, viscosity_single_file_chen2020
     with _options(args):
         est = estimate(diameter_um=args.diameter_um, hematocrit=args.hematocrit,
                        hematocrit_kind=args.hematocrit_kind, extrapolate=args.extrapolate)
@@ -282,7 +282,7 @@ def _single_file_viscosity(args) -> dict:
 
 
 def cmd_fahraeus(args) -> dict:
-    from . import viscosity as v
+    from correlations import viscosity as v
     d = args.diameter_um
     if (args.discharge_hematocrit is None) == (args.tube_hematocrit is None):
         raise UsageError("give exactly one of --discharge-hematocrit H, --tube-hematocrit H")
@@ -311,8 +311,8 @@ def cmd_fahraeus(args) -> dict:
 # --------------------------------------------------------------------------- parser
 
 def build_parser() -> argparse.ArgumentParser:
-    from .estimate import PHYSICAL_BOUNDS, RBC_DEFAULTS
-    from .registry import SOLVERS
+    from correlations.estimate import PHYSICAL_BOUNDS, RBC_DEFAULTS
+    from correlations.registry import SOLVERS
     p = Parser(prog="vesicle-tube", description="Vesicles and red blood cells in narrow tubes "
                 "(Stokes flow): geometry, engineering estimates, apparent viscosity.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
@@ -396,14 +396,14 @@ def build_parser() -> argparse.ArgumentParser:
     common(f)
     f.set_defaults(func=cmd_fahraeus)
 
-    from lubrication.cli import add_parser as add_lubrication   # light: solvers load on use
+    from correlations.cli.lubrication import add_parser as add_lubrication   # light: solvers load on use
     add_lubrication(sub)
-    from bem.cli import add_bem_parser                          # light: numba loads on use
+    from correlations.cli.bem import add_bem_parser                          # light: numba loads on use
     add_bem_parser(sub)
-    from .map_cli import add_map_parser; add_map_parser(sub)   # light: solvers load on use
-    from .check_cli import add_check_parser; add_check_parser(sub)   # light: loads on use
-    from .infer_cli import add_infer_parser; add_infer_parser(sub)   # light: loads on use
-    from .figures_cli import add_figures_parser; add_figures_parser(sub)   # light: loads on use
+    from correlations.cli.map import add_map_parser; add_map_parser(sub)   # light: solvers load on use
+    from correlations.cli.check import add_check_parser; add_check_parser(sub)   # light: loads on use
+    from correlations.cli.infer import add_infer_parser; add_infer_parser(sub)   # light: loads on use
+    from correlations.cli.figures import add_figures_parser; add_figures_parser(sub)   # light: loads on use
     return p
 
 
@@ -449,7 +449,7 @@ def _unphysical_flags(out: dict) -> list[str]:
 
 
 def _run(args) -> int:
-    """Run the command of ``args`` under the contract of :mod:`lubrication.cli_contract`."""
+    """Run the command of ``args`` under the contract of :mod:`correlations.cli.contract`."""
     from lubrication.io import forget_written_files, written_files
     prog = _prog(args)
     forget_written_files()
@@ -491,7 +491,7 @@ def _run(args) -> int:
 
 
 def main(argv=None) -> int:
-    """Entry point of ``vesicle-tube``: exit status per :mod:`lubrication.cli_contract`."""
+    """Entry point of ``vesicle-tube``: exit status per :mod:`correlations.cli.contract`."""
     prog = "vesicle-tube"
     try:
         args = build_parser().parse_args(argv)
@@ -505,6 +505,3 @@ def main(argv=None) -> int:
     except BrokenPipeError:
         return quiet_broken_pipe()
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,6 +1,6 @@
 """``vesicle-tube check FILE``: the consistency check on the command line, and its report.
 
-Follows :mod:`lubrication.cli_contract`: a table (one line per check) or ``--json`` (one object
+Follows :mod:`correlations.cli.contract`: a table (one line per check) or ``--json`` (one object
 with a ``rows`` list, each row with its ``verdict`` and its ``checks``); exit 0 when no row
 fails (warnings allowed), 1 when a row fails, 2 for unreadable input (one line naming the row
 and column), 130 on Ctrl-C. ``--report FILE.md|FILE.html`` writes a report with a figure of the
@@ -20,9 +20,9 @@ __all__ = ["add_check_parser", "cmd_check", "write_report"]
 
 
 def cmd_check(args):
-    from lubrication.cli_contract import options_named
+    from correlations.cli.contract import options_named
 
-    from .check import check_results
+    from correlations.check import check_results
     with options_named({"map": "--map"}, args):
         report = check_results(args.file, bem=not args.no_bem, solution_map=args.map)
     out = {"command": "check", "converged": True, **report.to_dict()}
@@ -36,7 +36,7 @@ def cmd_check(args):
 def _blocks(report, figure: str) -> list:
     """The report as blocks (``("h1"|"h2"|"p", text)``, ``("table", head, rows)``,
     ``("ul", items)``, ``("img", name)``), rendered by :func:`_markdown` or :func:`_html`."""
-    from .check import TOLERANCE_RULE, format_cell
+    from correlations.check import TOLERANCE_RULE, format_cell
     counts = ", ".join(f"{n} {v}" for v, n in report.counts.items())
     prov = report.provenance
     blocks = [("h1", f"Consistency check of {report.source}"),
@@ -120,7 +120,7 @@ def write_report(report, path) -> Path:
 
     from lubrication.io import atomic_write
 
-    from .plotting import plot_check
+    from correlations.plotting import plot_check
     path = Path(path)
     ax = plot_check(report)
     buffer = io.BytesIO()
@@ -140,7 +140,7 @@ def write_report(report, path) -> Path:
 
 def add_check_parser(subparsers) -> None:
     """Add ``check`` to the subcommands."""
-    from lubrication.cli_contract import add_map_option
+    from correlations.cli.contract import add_map_option
     p = subparsers.add_parser(
         "check", help="check results (CSV or JSON rows: your V/U, dp+, length, film) against "
                       "the physics and our references")

@@ -1,7 +1,7 @@
 """``vesicle-tube bem ...``: the boundary element solvers on the command line.
 
 Registered by :func:`correlations.cli.build_parser` through :func:`add_bem_parser`; the contract
-is the one of :mod:`lubrication.cli_contract` (table for people, one JSON object with ``--json``, exit
+is the one of :mod:`correlations.cli.contract` (table for people, one JSON object with ``--json``, exit
 0 / 2 invalid input with one line on stderr / 1 not converged with the JSON still printed and
 ``"converged": false``). This module imports only the standard library at import time: numba,
 numpy and matplotlib load inside the command functions, so that ``vesicle-tube estimate`` stays
@@ -40,19 +40,19 @@ _OPTIONS = {"lam": "--lam", "lam_ratio": "--lam-ratio", "lams": "--lam", "lam_ra
 
 
 def _options_named():
-    """Input-check errors name the option (:func:`lubrication.cli_contract.options_named`)."""
-    from lubrication.cli_contract import options_named
+    """Input-check errors name the option (:func:`correlations.cli.contract.options_named`)."""
+    from correlations.cli.contract import options_named
     return options_named(_OPTIONS)
 
 
 def cmd_bem_sphere(args):
     """Free rigid sphere of radius lam R on the axis of Poiseuille flow."""
-    from lubrication.cli_contract import format_rows
+    from correlations.cli.contract import format_rows
 
-    from .solve import check_sphere_inputs
+    from bem.solve import check_sphere_inputs
     with _options_named():
         check_sphere_inputs(args.lam, panels=args.panels, tol=args.tol, max_time=args.max_time)
-    from .solve import solve_sphere
+    from bem.solve import solve_sphere
     res = solve_sphere(args.lam, panels=args.panels, tol=args.tol, max_time=args.max_time)
     ok = bool(res.converged)
     out = {"command": "bem", "subcommand": "sphere"}
@@ -94,9 +94,9 @@ def _shape_result_json(res, subcommand: str, args) -> dict:
 def _plot_shape(res, args) -> None:
     """--plot FILE: the body's shape in the tube."""
     if args.plot:
-        from lubrication.cli_contract import save_plot
+        from correlations.cli.contract import save_plot
 
-        from .plotting import plot_shape
+        from bem.plotting import plot_shape
         save_plot(plot_shape(res), args.plot)
 
 
@@ -114,13 +114,13 @@ def _method_and_error(res):
 
 def cmd_bem_drop(args):
     """Steady clean drop (viscosity ratio 1, constant tension) on the axis."""
-    from lubrication.cli_contract import format_rows
+    from correlations.cli.contract import format_rows
 
-    from .drop import check_drop_inputs
+    from bem.drop import check_drop_inputs
     with _options_named():
         check_drop_inputs(args.lam, args.ca, n_modes=args.modes, tol=args.tol,
                           max_time=args.max_time)
-    from .drop import solve_drop
+    from bem.drop import solve_drop
     res = solve_drop(args.lam, args.ca, n_modes=args.modes, tol=args.tol,
                      max_time=args.max_time)
     out = _shape_result_json(res, "drop", args)
@@ -155,13 +155,13 @@ def _vesicle_solver_options(args) -> dict:
 
 def cmd_bem_vesicle(args):
     """Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the axis."""
-    from lubrication.cli_contract import format_rows
+    from correlations.cli.contract import format_rows
 
-    from .vesicle import check_vesicle_inputs
+    from bem.vesicle import check_vesicle_inputs
     with _options_named():
         check_vesicle_inputs(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
                              max_time=args.max_time, **_vesicle_solver_options(args))
-    from .vesicle import solve_vesicle
+    from bem.vesicle import solve_vesicle
     res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
                         max_time=args.max_time, **_vesicle_solver_options(args))
     out = _shape_result_json(res, "vesicle", args)
@@ -198,9 +198,9 @@ def _sweep_values(args):
     """The confinements of ``--lam A B N`` or ``--lam-ratio A B N`` (N points, A to B)."""
     import numpy as np
 
-    from lubrication.cli_contract import UsageError
+    from correlations.cli.contract import UsageError
 
-    from .sweep import MAX_POINTS
+    from bem.sweep import MAX_POINTS
     option, (a, b, n) = (("--lam", args.lam) if args.lam is not None
                          else ("--lam-ratio", args.lam_ratio))
     if not (math.isfinite(n) and n.is_integer() and n >= 2):
@@ -222,7 +222,7 @@ _SWEEP_TABLE = (("lam", "lam=R0/R", ".5g"), ("lam_ratio", "lam/lam_c", ".4f"),
 
 def _sweep_text(table, title: str) -> str:
     """One row per point, labelled columns; "—" for missing values."""
-    from lubrication.cli_contract import format_value
+    from correlations.cli.contract import format_value
     cells = [[h for _, h, _ in _SWEEP_TABLE]]
     for t in table:
         row = []
@@ -244,8 +244,8 @@ def _sweep_text(table, title: str) -> str:
 
 def cmd_bem_vesicle_sweep(args):
     """Steady vesicles over a range of confinements at fixed nu (continuation in lam)."""
-    from .sweep import _confinements
-    from .vesicle import check_vesicle_inputs
+    from bem.sweep import _confinements
+    from bem.vesicle import check_vesicle_inputs
     points = _sweep_values(args)
     solver = _vesicle_solver_options(args)
     with _options_named():
@@ -253,7 +253,7 @@ def cmd_bem_vesicle_sweep(args):
                                       args.ca_b)
         check_vesicle_inputs(args.nu, float(lams[0]), ca_b=args.ca_b, max_time=args.max_time,
                              **solver)
-    from .sweep import save_sweep, sweep_table, sweep_vesicle
+    from bem.sweep import save_sweep, sweep_table, sweep_vesicle
     done = []
 
     def report(i, n, res, seconds):
@@ -282,9 +282,9 @@ def cmd_bem_vesicle_sweep(args):
     if args.out:
         out["files"] = [str(p) for p in save_sweep(args.out, results, solver)]
     if args.plot:
-        from lubrication.cli_contract import save_plot
+        from correlations.cli.contract import save_plot
 
-        from .plotting import plot_vesicle_sweep
+        from bem.plotting import plot_vesicle_sweep
         save_plot(plot_vesicle_sweep(results), args.plot)
     title = (f"Vesicle sweep (BEM), nu = {r0.nu:g}, lam_c = {r0.lam_c:.4g}, Ca_B = "
              f"{r0.ca_b:g}: {out['n_converged']}/{len(results)} points converged; "
@@ -296,7 +296,7 @@ def cmd_bem_vesicle_sweep(args):
 def _vesicle_options(p, sweep: bool) -> None:
     """Inputs and refinement options of ``bem vesicle`` (one lam) and ``vesicle-sweep``
     (``--lam A B N``)."""
-    from lubrication.cli_contract import add_max_time_option, finite_float, positive_int
+    from correlations.cli.contract import add_max_time_option, finite_float, positive_int
     p.add_argument("--nu", type=finite_float, required=True, help="reduced volume, 0 < nu < 1 [-]")
     g = p.add_mutually_exclusive_group(required=True)
     many = {"nargs": 3, "metavar": ("A", "B", "N")} if sweep else {}
@@ -338,7 +338,7 @@ def _output_options(p, func, *, plot: str, out: str | None = None,
 
 def add_bem_parser(subparsers) -> None:
     """Add ``bem sphere``, ``drop``, ``vesicle`` and ``vesicle-sweep`` to the subcommands."""
-    from lubrication.cli_contract import (
+    from correlations.cli.contract import (
         Parser,
         add_max_time_option,
         finite_float,

@@ -1,0 +1,7 @@
+"""``python -m correlations.cli``: the ``vesicle-tube`` command."""
+
+import sys
+
+from correlations.cli import main
+
+sys.exit(main())
