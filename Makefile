@@ -5,7 +5,7 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV   := .venv
 BIN    := $(VENV)/bin
 
-.PHONY: run test test-portable validation validation-report benchmark clean
+.PHONY: run test test-portable validation validation-report benchmark docs clean
 
 $(BIN)/vesicle-tube: pyproject.toml
 	$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11) and "Python >= 3.11 is required")'
@@ -51,6 +51,13 @@ benchmark: $(BIN)/vesicle-tube
 	$(BIN)/python tests/benchmarks/bench_check.py
 	$(BIN)/python tests/benchmarks/bench_infer.py
 	$(BIN)/python tests/benchmarks/bench_map_build.py
+
+# The HTML reference in build/docs/html: the pages of docs/ and the API of the three packages
+# (Sphinx; warnings are errors; the docstrings' >>> examples run as doctests in `make test`).
+# Sphinx and MyST-Parser are installed on first use.
+docs: $(BIN)/vesicle-tube
+	$(BIN)/python -c 'import sphinx, myst_parser' 2>/dev/null || $(BIN)/python -m pip install --quiet -e '.[docs]'
+	$(BIN)/sphinx-build -W --keep-going -b html docs build/docs/html
 
 clean:
 	rm -rf $(VENV) build *.egg-info

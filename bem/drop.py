@@ -358,7 +358,7 @@ def newton_drop(op: DropOperator, modes0, V0: float | None = None, *, tol: float
 
 
 # -------------------------------------------------------------------------------- relaxation
-def _shape_velocity_matrix(op: DropOperator, modes: np.ndarray, h: float = 1e-7) -> np.ndarray:
+def shape_velocity_matrix(op: DropOperator, modes: np.ndarray, h: float = 1e-7) -> np.ndarray:
     """d(X.n)/dz at the nodes for the free modes z = op.free(modes) (geometry only, no BEM;
     the dependent modes follow through ``op.curve``)."""
     base = op.curve(modes)
@@ -407,7 +407,7 @@ def relax_drop(op: DropOperator, modes0, t_end: float, *, dt: float | None = Non
         V = st.centroid_velocity()
         un = st.residual(V)
         sw = np.sqrt(st.weights)
-        G = _shape_velocity_matrix(op, st.curve.modes)
+        G = shape_velocity_matrix(op, st.curve.modes)
         dm, *_ = np.linalg.lstsq(sw[:, None] * G, sw * un, rcond=None)
         return np.concatenate([[0.0], dm]), st, V, un
 
@@ -458,7 +458,7 @@ def relax_drop(op: DropOperator, modes0, t_end: float, *, dt: float | None = Non
 SEED_MODES = 16
 
 
-def _panels_for(n_modes: int) -> int:
+def panels_for(n_modes: int) -> int:
     """Drop panels for ``n_modes`` shape modes: the panel rule must resolve the curvature of
     the highest mode; one 16-point panel per three modes was enough in the convergence study
     (maxres unchanged when the panels were doubled), with at least 8 panels."""
@@ -499,15 +499,15 @@ def check_drop_inputs(lam, ca, *, n_modes=None, tol=1e-5, residual_tol=1e-4, max
             f"V/U = 2 - 0.8 lam^2 = {2 - 0.8 * lam**2:.10g}, dp+ R0/(eta U) = 4.8 lam^6 = "
             f"{4.8 * lam**6:.4g} (relative error O(lam^5))")
     residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 1.0))
-    max_modes = _mode_count("max_modes", max_modes, 8)
+    max_modes = mode_count("max_modes", max_modes, 8)
     if n_modes is not None:
-        n_modes = _mode_count("n_modes", n_modes, 6)
+        n_modes = mode_count("n_modes", n_modes, 6)
     if max_time is not None:
         Deadline(max_time)                              # 0 < max_time < inf
     return lam, ca, n_modes, tol, residual_tol, max_modes
 
 
-def _mode_count(name, value, lo, hi=MAX_MODES) -> int:
+def mode_count(name, value, lo, hi=MAX_MODES) -> int:
     """An integer number of shape modes within lo..hi (the drop's or the vesicle's envelope)."""
     value = check_range(name, value, lo, hi,
                         reason="more modes exceed the resource envelope of one level "
@@ -548,7 +548,7 @@ def find_seed(lam: float, ca: float, *, initial: SpectralCurve | None = None,
     elongating is reported as such). ``deadline``: wall-time budget, tested between BEM
     evaluations.
     """
-    disc = DropDiscretisation(n_modes=SEED_MODES, n_panels=_panels_for(SEED_MODES), order=order)
+    disc = DropDiscretisation(n_modes=SEED_MODES, n_panels=panels_for(SEED_MODES), order=order)
     start = SpectralCurve.sphere(lam, SEED_MODES) if initial is None else initial
     if start.density.size:                                   # the seed stage is uniform
         start = fit_curve(start.sample, 0.0, 1.0, SEED_MODES)
@@ -704,7 +704,7 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
     if density_terms and info["residual"] > 1e-3:
         # the 16 uniform modes did not resolve the shape (a sharp rim): adapt the density to
         # a solution that uses it, which does
-        disc = DropDiscretisation(n_modes=sequence[0], n_panels=_panels_for(sequence[0]),
+        disc = DropDiscretisation(n_modes=sequence[0], n_panels=panels_for(sequence[0]),
                                   order=order)
         rep, _ = _solve_stage(lam, ca, disc, seed, seed_V, density, deadline=deadline)
         iterations["density"] = {"iterations": rep.iterations, "evaluations": rep.evaluations,
@@ -722,7 +722,7 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
         if deadline.expired():
             message = deadline.message()
             break
-        disc = DropDiscretisation(n_modes=n, n_panels=_panels_for(n), order=order)
+        disc = DropDiscretisation(n_modes=n, n_panels=panels_for(n), order=order)
         t0 = time.perf_counter()
         try:
             rep, op = _solve_stage(lam, ca, disc, prev, V_prev, density, deadline=deadline)

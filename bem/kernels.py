@@ -500,7 +500,7 @@ def influence_matrix(tx, tr, px, pr, pw, pcx, pcr, tn, bw, gx, gw, near, tol, se
     out[2i + a, 2(P p + k) + b] = int_panel_P M_ab(target i; X) ell_k dl, so that
     u_a(i) = (8 pi eta)^-1 sum out[2i+a, 2j+b] q_b(j) for node densities q (force per area on
     the fluid). Inputs: targets tx, tr (nt,); panel node coordinates px, pr (np, p); pw (np, p)
-    Gauss weight times |dX/dt| at the nodes; Legendre coefficients pcx, pcr (np, p) of the
+    Gauss weight times ``|dX/dt|`` at the nodes; Legendre coefficients pcx, pcr (np, p) of the
     panel curves; tn, bw Gauss nodes and barycentric weights on [-1, 1]; gx, gw Gauss rules
     (row n holds the n-point rule); panels closer to a target than ``near`` times their length
     are integrated by :func:`panel_integral` to ``tol``, the others by the nodes' own rule.
@@ -590,7 +590,7 @@ def cross_influence_matrix(ax, ar, aw, acx, acr, bx, br, bw_, bcx, bcr, tn, bw, 
     graded rule; every other pair of nodes (a_i, b_j) costs one ring Stokeslet M(a_i; b_j),
     which gives the entry of out_ab and, by the reciprocity of the ring Stokeslet
     M_ab(x0; x)/r = M_ba(x; x0)/r0, the entry M_ba(b_j; a_i) = (r_i/r_j) M_ab(a_i; b_j) of out_ba.
-    Inputs per set: node coordinates, weights (Gauss weight times |dX/dt|), Legendre
+    Inputs per set: node coordinates, weights (Gauss weight times ``|dX/dt|``), Legendre
     coefficients, all (n_panels, p); the rest as :func:`influence_matrix`. The a-panels are
     dealt out to the threads (one parallel region); out_ba is written by columns, so a should
     be the larger set (rows of out_ba short: measured 123 ms against 170 ms the other way

@@ -39,7 +39,7 @@ import scipy.fft
 
 from lubrication.checks import check_range
 
-from .shape import SpectralCurve, _gauss01
+from .shape import SpectralCurve, gauss_legendre01
 
 __all__ = ["bending_energy", "bending_force", "mean_curvature_series", "surface_laplacian_H",
            "tension_basis", "tension_force", "tension_profile"]
@@ -67,17 +67,17 @@ def _cos_series(c, tau, deriv=0):
     """sum_k c_k d^n/dtau^n cos(k pi tau), k = 0..len(c)-1, n = deriv in 0, 1, 2 (tau an
     array), by the Clenshaw recurrences of :mod:`bem.shape` (the derivative series are the
     sine and cosine series of k c_k and k^2 c_k)."""
-    from .shape import _cosine_sum, _sine_clenshaw
+    from .shape import cosine_series, sine_series
 
     c = np.asarray(c, dtype=float)
     tau = np.asarray(tau, dtype=float)
     th = np.pi * tau
     k = np.arange(1, c.size)
     if deriv == 0:
-        return c[0] + _cosine_sum(c[1:], th)
+        return c[0] + cosine_series(c[1:], th)
     if deriv == 1:
-        return -np.pi * _sine_clenshaw(k * c[1:], th) * np.sin(th)
-    return -np.pi**2 * _cosine_sum(k * k * c[1:], th)
+        return -np.pi * sine_series(k * c[1:], th) * np.sin(th)
+    return -np.pi**2 * cosine_series(k * k * c[1:], th)
 
 
 def _g_and_derivative(curve: SpectralCurve, tau):
@@ -146,8 +146,9 @@ def tension_force(curve: SpectralCurve, g, tau):
 
 
 def tension_basis(curve: SpectralCurve, tau, n_terms: int) -> np.ndarray:
-    """Tension force of each term cos(k pi tau), k = 0..n_terms-1: array (n_terms, 2, *tau.shape)
-    with the x and r components (the force is linear in the coefficients)."""
+    """Tension force of each term cos(k pi tau), k = 0..n_terms-1: array
+    ``(n_terms, 2, *tau.shape)`` with the x and r components (the force is linear in the
+    coefficients)."""
     tau = np.asarray(tau, dtype=float)
     n_terms = int(check_range("n_terms", n_terms, 1, 4096))
     psi = curve.tangent_angle(tau)
@@ -167,7 +168,7 @@ def tension_basis(curve: SpectralCurve, tau, n_terms: int) -> np.ndarray:
 
 def bending_energy(curve: SpectralCurve, kappa: float = 1.0, n_quad: int | None = None) -> float:
     r"""Helfrich energy :math:`2\kappa\int H^2\,dA` (8πκ for any sphere)."""
-    t, w = _gauss01(n_quad or (4 * (curve.n_modes + curve.density.size) + 96))
+    t, w = gauss_legendre01(n_quad or (4 * (curve.n_modes + curve.density.size) + 96))
     _, r = curve.position(t)
     H = curve.mean_curvature(t)
     dA = 2.0 * math.pi * r * curve.length * curve.g(t) * w

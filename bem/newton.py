@@ -2,23 +2,23 @@ r"""Levenberg–Marquardt with Broyden updates for the BEM steady-shape problems
 
 The residual :math:`F(z)` of a steady shape is an overdetermined, smooth function of a few dozen
 shape coefficients z, each evaluation costing one BEM solve. The Jacobian is built by forward
-differences (one evaluation per unknown, step ``fd_step`` max(1, |z_j|)), then kept up to date
+differences (one evaluation per unknown, step ``fd_step`` max(1, ``|z_j|``)), then kept up to date
 by Broyden rank-one updates after each accepted step (Dennis & Schnabel 1983, §8.1); a fresh
-difference Jacobian is computed when a Broyden step is rejected or reduces |F| by less than half
+difference Jacobian is computed when a Broyden step is rejected or reduces ``|F|`` by less than half
 (at most ``max_jacobians`` in all); a Jacobian supplied by the caller (e.g. a coarser
 level's) can replace the first difference Jacobian. Damping: Marquardt's diagonal scaling, μ
 divided by 10 after an accepted step and multiplied by 10 (at least to 1e-4) after a rejected
 one.
 
-Stopping: the largest change of the unknowns relative to max(1, |z|) falls below ``tol``; or
-|F| stalls at its floor (the truncation error of the shape modes: the equations outnumber the
-unknowns): a step with a fresh Jacobian reduces |F| by less than 10 % with a step below
-1e3 tol, or the Gauss–Newton model itself promises less than a 1e-3 relative decrease of |F|².
-Near the critical confinement the vesicle problem is ill-conditioned (flat directions of |F|):
-with ``floor_ratio`` the floor tests look at |F|, not at the step, and the refinement pair
+Stopping: the largest change of the unknowns relative to max(1, ``|z|``) falls below ``tol``; or
+``|F|`` stalls at its floor (the truncation error of the shape modes: the equations outnumber the
+unknowns): a step with a fresh Jacobian reduces ``|F|`` by less than 10 % with a step below
+1e3 tol, or the Gauss–Newton model itself promises less than a 1e-3 relative decrease of ``|F|²``.
+Near the critical confinement the vesicle problem is ill-conditioned (flat directions of ``|F|``):
+with ``floor_ratio`` the floor tests look at ``|F|``, not at the step, and the refinement pair
 judges the outputs.
 
-:func:`valley_levenberg_marquardt` is the variant for a long, curved valley of |F| (the long
+:func:`valley_levenberg_marquardt` is the variant for a long, curved valley of ``|F|`` (the long
 vesicle near lam_c, see its docstring): the same damped steps, but the Jacobian is kept
 up to date by differences along a few directions per step instead of all of them, and every
 second step is extrapolated along the valley (parallel tangents).
@@ -34,12 +34,12 @@ returning (evaluate, project)), the difference quotients of a Jacobian or a dire
 are taken on ``evaluate``, the residual with the payload's linear unknowns held fixed, and
 projected off the range of their columns by ``project`` (variable projection with Kaufman's
 Jacobian, Kaufman 1975; Golub & Pereyra 2003): J^T F equals that of the full Jacobian at every
-z, and the columns differ by a term of order |F|.
+z, and the columns differ by a term of order ``|F|``.
 
 Wall-time budget: both take an optional ``deadline`` (:class:`lubrication.checks.Deadline`),
 tested before every evaluation of F after the first; once it is spent they return an
 unsuccessful report whose message is the deadline's, carrying the evaluated point of smallest
-|F| (never an exception). One evaluation is one BEM solve (well under a second at the
+``|F|`` (never an exception). One evaluation is one BEM solve (well under a second at the
 resolutions the solvers allow), so the budget is kept to within about one evaluation, or one
 set of independent points handed to ``fun.many`` (a difference Jacobian: seconds at the
 largest mode counts).
@@ -238,16 +238,16 @@ def levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 40,
                         exact_columns=None, stall: float | None = None,
                         floor_ratio: float | None = None, start=None,
                         jacobian=None, deadline=None) -> LMReport:
-    """Minimise |F(z)| (see the module docstring).
+    """Minimise ``|F(z)|`` (see the module docstring).
 
     ``fun(z)`` returns (F, payload) and raises InvalidParameterError for an invalid shape;
     ``exact_columns(payload)``, if given, returns {index: column} of Jacobian columns known
     exactly (e.g. the linear speed unknown). ``stall`` (e.g. 0.9): also stop, as converged
-    to the floor, at the first accepted step that reduces |F| by less than this ratio, whatever
+    to the floor, at the first accepted step that reduces ``|F|`` by less than this ratio, whatever
     the Jacobian, or when a Broyden step fails with the Jacobian budget spent (for a coarse
     level that only seeds a finer one). ``floor_ratio`` (e.g. 0.99): also accept as the floor
-    a step with a fresh Jacobian that reduces |F| by less than this ratio whatever its size, or a
-    spent Jacobian budget after |F| fell less than 10 % over three steps (ill-conditioned
+    a step with a fresh Jacobian that reduces ``|F|`` by less than this ratio whatever its size, or a
+    spent Jacobian budget after ``|F|`` fell less than 10 % over three steps (ill-conditioned
     problems with flat directions: the vesicle near lam_c). Without it a stall is a failure
     (the drop: a stall there means no steady shape). ``start``: (F, payload) at ``z0`` if the
     caller has already evaluated it (saves one evaluation). ``jacobian``: an approximate
@@ -418,14 +418,14 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
                                fd_step: float = 1e-7, max_jacobians: int = 4,
                                directions: int = 3, promise: float = 1e-2,
                                start=None, jacobian=None, deadline=None) -> LMReport:
-    r"""Minimise |F(z)| along a long, curved valley (interface as :func:`levenberg_marquardt`).
+    r"""Minimise ``|F(z)|`` along a long, curved valley (interface as :func:`levenberg_marquardt`).
 
     Why: near lam_c a long vesicle has one slow shape mode (volume moved between the rear and
-    front caps, which the outer fluid must follow through the thin film); |F| is nearly flat
+    front caps, which the outer fluid must follow through the thin film); ``|F|`` is nearly flat
     along it and the valley is so curved (the second derivative of F along it has a large part
     outside the range of J) that a Gauss–Newton step along it is limited to ~10 % of its
-    linear length. The plain method then gains 1–4 % of |F| per difference Jacobian and stops
-    at its floor tests far from the minimum (measured at (0.6, 1.94), 64 modes: |F| 1.86e-3,
+    linear length. The plain method then gains 1–4 % of ``|F|`` per difference Jacobian and stops
+    at its floor tests far from the minimum (measured at (0.6, 1.94), 64 modes: ``|F|`` 1.86e-3,
     V/U 1.02294, γ_max 799 where the minimum is 1.17e-3, 1.02176, 932; docs/validation.md).
 
     Method: one forward-difference Jacobian, then per accepted Levenberg–Marquardt step
@@ -433,10 +433,10 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
     and forward differences along the step and the ``directions`` right singular vectors of
     the smallest singular values (``directions + 1`` evaluations instead of one per unknown).
     Every second step the iterate is extrapolated along z_k - z_{k-2} by 1, 2, 4, ... (up to
-    64) times while |F| decreases (parallel tangents, Shah, Buehler & Kempthorne 1964).
-    When a step fails, |F| falls by less than 0.1 % or the relative step is below ``tol``, a
+    64) times while ``|F|`` decreases (parallel tangents, Shah, Buehler & Kempthorne 1964).
+    When a step fails, ``|F|`` falls by less than 0.1 % or the relative step is below ``tol``, a
     fresh difference Jacobian is made; converged when with it the Gauss–Newton model promises
-    less than a ``promise`` relative decrease of |F|^2 (the residual floor of the
+    less than a ``promise`` relative decrease of ``|F|^2`` (the residual floor of the
     overdetermined equations), or its step is below ``tol`` (a small step of an updated
     Jacobian, with large damping, proves nothing). A Jacobian differenced in this solve, since
     moved by less than ``RECENT_STEP``, certifies the floor itself when it promises less than
@@ -444,7 +444,7 @@ def valley_levenberg_marquardt(fun, z0, *, tol: float = 1e-9, max_iter: int = 30
     ``max_jacobians`` difference Jacobians. ``jacobian``: an approximate Jacobian at ``z0``
     (e.g. prolonged from a coarser discretisation) used in place of the first difference
     Jacobian (it is not counted; the floor is still certified with a fresh one, which is also
-    made once ``CRAWL_STEPS`` steps with it reduced |F| by less than ``CRAWL_GAIN``).
+    made once ``CRAWL_STEPS`` steps with it reduced ``|F|`` by less than ``CRAWL_GAIN``).
     ``deadline``: wall-time budget (module docstring).
     """
     return _within_budget(_valley_levenberg_marquardt, fun, z0, deadline, start, tol=tol,

@@ -12,7 +12,7 @@ import numpy as np
 __all__ = ["plot_shape", "plot_vesicle_sweep"]
 
 
-def _draw_tube(ax, half: float) -> None:
+def draw_tube(ax, half: float) -> None:
     """Tube wall r = ±R over |x| <= half, axis, flow arrow, equal axes with labels."""
     for y in (1.0, -1.0):
         ax.plot([-half, half], [y, y], "k-", lw=2)
@@ -56,7 +56,7 @@ def plot_shape(result, ax=None):
             alpha=0.25, lw=0)
     ax.plot(x, r, "-", color="tab:blue", lw=1.5)
     ax.plot(x, -r, "-", color="tab:blue", lw=1.5)
-    _draw_tube(ax, half)
+    draw_tube(ax, half)
     title = f"λ = {result.lam:.4g}"
     if hasattr(result, "nu"):
         title = f"ν = {result.nu:.4g}, " + title
@@ -116,7 +116,7 @@ def plot_vesicle_sweep(results, ax=None):
         ax.plot(x, r, **style)
         ax.plot(x, -r, **style)
         drawn += 1
-    _draw_tube(ax, half)
+    draw_tube(ax, half)
     ax.figure.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax,
                        label="λ = R0/R [-]", shrink=0.8)
     title = ""

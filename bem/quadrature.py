@@ -95,7 +95,7 @@ def serial_assembly():
         _ON_THIS_THREAD.serial = before
 
 
-def _serial(work: int) -> bool:
+def assembles_serially(work: int) -> bool:
     return work < SERIAL_WORK or getattr(_ON_THIS_THREAD, "serial", False)
 
 
@@ -343,7 +343,7 @@ def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NE
     fixed = self_rule_panels(panels, as_tol)
     st, sw, sell = self_rule(p)
     out = np.empty((2 * tx.size, 2 * n))
-    kernel = (kernels.influence_matrix_serial if _serial(tx.size * n)
+    kernel = (kernels.influence_matrix_serial if assembles_serially(tx.size * n)
               else kernels.influence_matrix)
     kernel(tx, tr, panels.x, panels.r, panels.w, panels.cx, panels.cr, t, barycentric_weights(p),
            gx, gw, as_near, as_tol, self_node, fixed, st, sw, sell, out)
@@ -372,7 +372,7 @@ def influence_pair(a: PanelSet, b: PanelSet, *, near: float | None = NEAR_FACTOR
     gx, gw = gauss_table()
     out_ab = np.empty((2 * a.n_nodes, 2 * b.n_nodes))
     out_ba = np.empty((2 * b.n_nodes, 2 * a.n_nodes))
-    kernel = (kernels.cross_influence_matrix_serial if _serial(a.n_nodes * b.n_nodes)
+    kernel = (kernels.cross_influence_matrix_serial if assembles_serially(a.n_nodes * b.n_nodes)
               else kernels.cross_influence_matrix)
     kernel(a.x, a.r, a.w, a.cx, a.cr, b.x, b.r, b.w, b.cx, b.cr, t, barycentric_weights(p), gx,
            gw, as_near, as_tol, out_ab, out_ba)

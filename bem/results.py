@@ -54,7 +54,7 @@ class SphereResult:
     panels, panels_coarse : dict
         Panel counts (body, wall, inlet) and Gauss order of the fine and coarse meshes.
     residual : float
-        max |A z - b| / max |b| of the fine linear system.
+        max ``|A z - b|`` / max ``|b|`` of the fine linear system.
     null_multiplier : float
         Multiplier of the null-vector bordering column (0 for the exact solution).
     """
@@ -154,10 +154,10 @@ class DropResult(_SpectralSolution):
     dp_plus_R, dp_plus_R0 : float
         Extra pressure drop at fixed flow rate, Δp⁺R/(ηU) and Δp⁺R0/(ηU) [-].
     error_estimate : dict
-        |fine − coarse| of the refinement pair for V_over_U, dp_plus_R and dp_plus_R0: an upper
+        ``|fine − coarse|`` of the refinement pair for V_over_U, dp_plus_R and dp_plus_R0: an upper
         bound of the fine result's error when the error falls at least like N^-1.7 in the
         number N of modes (observed: faster, ~spectral; the Richardson estimate
-        |f − c|/((N_f/N_c)^p − 1) with the observed order p is much smaller).
+        ``|f − c|``/((N_f/N_c)^p − 1) with the observed order p is much smaller).
     length, max_radius, film : float
         Drop length x_front − x_rear, largest radius and smallest gap 1 − max r [R].
     curvature_front, curvature_rear : float
@@ -169,7 +169,7 @@ class DropResult(_SpectralSolution):
         Relative error of the volume computed by the panel quadrature of the fine mesh against
         4πλ³/3 (the parametrisation imposes the volume; this measures the geometry).
     residual : float
-        Steady-state residual max |u·n − V n_x| over the fine mesh's nodes [U].
+        Steady-state residual max ``|u·n − V n_x|`` over the fine mesh's nodes [U].
     panels, panels_coarse : dict
         Drop, wall and inlet panel counts, Gauss order and shape modes of the two meshes.
     iterations : dict
@@ -298,11 +298,11 @@ class VesicleResult(_SpectralSolution):
     error_estimate : dict
         Estimated discretisation error (absolute) of V_over_U, dp_plus_R0, tension_max: the
         extrapolated tail of the consistent ladder's differences (module docstring of
-        :mod:`bem.vesicle`), or |fine − coarse| of the pair for a given ``n_modes``.
+        :mod:`bem.vesicle`), or ``|fine − coarse|`` of the pair for a given ``n_modes``.
     volume_error, area_error : float
         Relative errors of the volume and area by panel quadrature of the fine mesh.
     residual : float
-        max |u − V e_x| over the membrane nodes of the fine mesh (both components) [U].
+        max ``|u − V e_x|`` over the membrane nodes of the fine mesh (both components) [U].
     refinement : list
         (modes, residual, V/U, Δp⁺R0/(ηU), γ_max) of every level solved.
     seed : str

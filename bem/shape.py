@@ -47,7 +47,7 @@ __all__ = ["SpectralCurve", "equidistributing_density", "film_density", "fit_cur
 PIECE_NODES = 24
 
 @cache
-def _gauss01(m: int) -> tuple[np.ndarray, np.ndarray]:
+def gauss_legendre01(m: int) -> tuple[np.ndarray, np.ndarray]:
     """m-point Gauss–Legendre nodes and weights on [0, 1] (read-only)."""
     t, w = np.polynomial.legendre.leggauss(int(m))
     t, w = 0.5 * (t + 1.0), 0.5 * w
@@ -56,7 +56,7 @@ def _gauss01(m: int) -> tuple[np.ndarray, np.ndarray]:
     return t, w
 
 
-def _sine_clenshaw(c: np.ndarray, theta):
+def sine_series(c: np.ndarray, theta):
     """b_1 of the Clenshaw recurrence, so that sum_k c_k sin(k theta) = b_1 sin(theta)."""
     from . import series  # lazy: the input checks of the solvers run before numba loads
 
@@ -65,7 +65,7 @@ def _sine_clenshaw(c: np.ndarray, theta):
     return series.sine_clenshaw(c, np.ascontiguousarray(theta).ravel()).reshape(theta.shape)
 
 
-def _cosine_sum(d: np.ndarray, theta):
+def cosine_series(d: np.ndarray, theta):
     """sum_{k=1}^N d_k cos(k theta) by the Clenshaw recurrence (0 for empty d)."""
     from . import series
 
@@ -181,15 +181,15 @@ class SpectralCurve:
         u = np.asarray(u, dtype=float)
         c, a = self._pole_coefficients(front)
         th = math.pi * u
-        b1 = _sine_clenshaw(c, th)
-        g = 1.0 + _cosine_sum(a, th) if a.size else np.ones_like(u)
+        b1 = sine_series(c, th)
+        g = 1.0 + cosine_series(a, th) if a.size else np.ones_like(u)
         return th - b1 * np.sin(th), g
 
     def _phi_ratio(self, u, front: bool):
         """(phi(u), phi(u)/u) with the ratio free of cancellation (pi (1 - b_1 sinc u))."""
         u = np.asarray(u, dtype=float)
         c, _ = self._pole_coefficients(front)
-        b1 = _sine_clenshaw(c, math.pi * u)
+        b1 = sine_series(c, math.pi * u)
         return math.pi * u - b1 * np.sin(math.pi * u), math.pi * (1.0 - b1 * np.sinc(u))
 
     def _integrals(self, u, front: bool):
@@ -207,7 +207,7 @@ class SpectralCurve:
         u = np.asarray(u, dtype=float)
         flat = u.ravel()
         order = np.argsort(flat)
-        t, w = _gauss01(PIECE_NODES)
+        t, w = gauss_legendre01(PIECE_NODES)
         c, a = self._pole_coefficients(front)
         ic, is_ = series.pole_integrals(np.ascontiguousarray(c), np.ascontiguousarray(a),
                                         np.ascontiguousarray(flat[order]), t, w,
@@ -222,24 +222,24 @@ class SpectralCurve:
         tau = np.asarray(tau, dtype=float)
         if not self.density.size:
             return np.ones_like(tau)
-        return 1.0 + _cosine_sum(self.density, math.pi * tau)
+        return 1.0 + cosine_series(self.density, math.pi * tau)
 
     def arc_length(self, tau):
         """s(tau) = S (tau + sum_j a_j sin(j pi tau)/(j pi)) [R]."""
         tau = np.asarray(tau, dtype=float)
         j = np.arange(1, self.density.size + 1)
-        extra = _sine_clenshaw(self.density / (j * math.pi), math.pi * tau) * np.sin(math.pi * tau)
+        extra = sine_series(self.density / (j * math.pi), math.pi * tau) * np.sin(math.pi * tau)
         return self.length * (tau + extra)
 
     def tangent_angle(self, tau):
         """psi(tau) [rad]."""
         tau = np.asarray(tau, dtype=float)
         th = math.pi * tau
-        return 0.5 * math.pi - th + _sine_clenshaw(self.modes, th) * np.sin(th)
+        return 0.5 * math.pi - th + sine_series(self.modes, th) * np.sin(th)
 
     def _front_x(self) -> float:
         """Axial position of the front pole."""
-        t, w = _gauss01(2 * self._quad)
+        t, w = gauss_legendre01(2 * self._quad)
         phi, g = self._phi(t, front=False)
         return self.x0 + self.length * float((g * np.sin(phi)) @ w)
 
@@ -284,7 +284,7 @@ class SpectralCurve:
         S = self.length
         k = np.arange(1, self.n_modes + 1)
         th = math.pi * tau
-        dpsi = -math.pi + math.pi * _cosine_sum(k * self.modes, th)
+        dpsi = -math.pi + math.pi * cosine_series(k * self.modes, th)
         k1 = -dpsi / (S * self.g(tau))
         k2 = np.empty_like(k1)
         rear = tau <= 0.5
@@ -306,7 +306,7 @@ class SpectralCurve:
     # ------------------------------------------------------------------ integral properties
     def _tau_rule(self, m: int | None = None):
         """Gauss rule on [0, 1/2] and [1/2, 1] (the two branches of :meth:`position`)."""
-        t, w = _gauss01(m or (2 * (self.n_modes + self.density.size) + 48))
+        t, w = gauss_legendre01(m or (2 * (self.n_modes + self.density.size) + 48))
         return np.concatenate([0.5 * t, 0.5 + 0.5 * t]), np.concatenate([0.5 * w, 0.5 * w])
 
     def _volume_centroid_area(self) -> tuple[float, float, float]:
@@ -348,7 +348,7 @@ class SpectralCurve:
 
     def closure_error(self) -> float:
         """r at the front pole integrated from the rear, S int_0^1 g sin psi [R] (0 if closed)."""
-        t, w = _gauss01(2 * self._quad)
+        t, w = gauss_legendre01(2 * self._quad)
         phi, g = self._phi(t, front=False)
         return float(self.length * ((g * np.cos(phi)) @ w))
 
@@ -366,11 +366,11 @@ def _closing_mode(modes: np.ndarray, density=()) -> float:
     """c_1 such that int_0^1 g sin psi d tau = 0, by Newton from c_1 = modes[0]."""
     c = np.array(modes, dtype=float)
     a = np.asarray(density, dtype=float)
-    t, w = _gauss01(4 * (c.size + a.size) + 48)      # as SpectralCurve.closure_error
+    t, w = gauss_legendre01(4 * (c.size + a.size) + 48)      # as SpectralCurve.closure_error
     th = math.pi * t
-    g = 1.0 + _cosine_sum(a, th) if a.size else np.ones_like(t)
+    g = 1.0 + cosine_series(a, th) if a.size else np.ones_like(t)
     s1 = np.sin(th)
-    rest = _sine_clenshaw(np.concatenate([[0.0], c[1:]]), th) * s1
+    rest = sine_series(np.concatenate([[0.0], c[1:]]), th) * s1
     for _ in range(50):
         phi = th - c[0] * s1 - rest                   # pi/2 - psi
         val = float((g * np.cos(phi)) @ w)            # int g sin psi
@@ -405,6 +405,8 @@ def fit_curve(curve: Callable, t0: float, t1: float, n_modes: int, *, density=()
     close : bool
         Adjust c_1 so that the truncated curve closes exactly.
 
+    Notes
+    -----
     The arc length is integrated from a Chebyshev interpolant of the speed (``n_cheb`` points),
     the tangent angle is sampled at Gauss nodes in tau and projected on the sine modes.
     """
@@ -415,7 +417,7 @@ def fit_curve(curve: Callable, t0: float, t1: float, n_modes: int, *, density=()
     s_of_t = speed.integ(lbnd=t0)
     S = float(s_of_t(t1))
     m = 4 * (n_modes + density.size) + 128
-    tau, w = _gauss01(m)
+    tau, w = gauss_legendre01(m)
     shape = SpectralCurve(np.zeros(1), S, 0.0, density)
     target = shape.arc_length(tau)                     # s at the nodes
     # invert s(t) = target by Newton from a monotone interpolation
@@ -497,7 +499,7 @@ def _density_from_weight(s, wgt, S, n_terms):
     """Cosine coefficients of g = W/(S w(s(tau))) with tau = int w ds / W (filtered)."""
     cum = np.concatenate([[0.0], np.cumsum(0.5 * (wgt[1:] + wgt[:-1]) * np.diff(s))])
     W = cum[-1]
-    tau_new, wq = _gauss01(8 * n_terms + 64)
+    tau_new, wq = gauss_legendre01(8 * n_terms + 64)
     s_new = np.interp(tau_new * W, cum, s)             # s at new parameter tau_new
     g_new = W / (S * np.interp(s_new, s, wgt))
     j = np.arange(1, n_terms + 1)

@@ -82,10 +82,10 @@ SWEEP_COLUMNS = (
 Progress = Callable[[int, int, object, float], None]
 
 
-def _confinements(nu, lams, lam_ratios, ca_b) -> tuple[float, np.ndarray, float, float]:
+def confinements(nu, lams, lam_ratios, ca_b) -> tuple[float, np.ndarray, float, float]:
     """Checked (nu, lam of each point, lam_c, ca_b), with the single-point checks of
     :func:`bem.vesicle.solve_vesicle` applied to every point (0 < lam < lam_c(nu))."""
-    from .vesicle import _check_inputs
+    from .vesicle import check_vesicle_case
 
     if (lams is None) == (lam_ratios is None):
         given = "neither" if lams is None else "both lams and lam_ratios"
@@ -102,7 +102,7 @@ def _confinements(nu, lams, lam_ratios, ca_b) -> tuple[float, np.ndarray, float,
                                     f"at most {MAX_POINTS} points",
                                     "each point is a full vesicle solve (seconds to minutes)")
     by_ratio = lam_ratios is not None
-    points = [_check_inputs(nu, None if by_ratio else v, v if by_ratio else None, ca_b)
+    points = [check_vesicle_case(nu, None if by_ratio else v, v if by_ratio else None, ca_b)
               for v in map(float, values)]
     return points[0][0], np.array([p[1] for p in points]), points[0][2], points[0][3]
 
@@ -164,7 +164,7 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
     from . import vesicle  # numba loads only when the first point is solved
     from .results import VesicleResult
 
-    nu, lam, lam_c, ca_b = _confinements(nu, lams, lam_ratios, ca_b)
+    nu, lam, lam_c, ca_b = confinements(nu, lams, lam_ratios, ca_b)
     for key in ("lam", "lam_ratio", "max_time"):
         if key in solver_kwargs:
             raise InvalidParameterError(key, str(solver_kwargs[key]),

@@ -36,7 +36,7 @@ Method:
   level below starts from that level's Jacobian interpolated to its nodes and differences only
   its new modes, :func:`_prolonged_columns`: at (0.9, 1.0) 57 BEM evaluations instead of 113,
   outputs within 3e-8 of the fresh-Jacobian minimum). Long vesicles near lam_c have a slow,
-  strongly curved valley of |F| (volume moved between the caps through the thin film); they
+  strongly curved valley of ``|F|`` (volume moved between the caps through the thin film); they
   use :func:`bem.newton.valley_levenberg_marquardt` (directional Jacobian updates,
   extrapolation along the valley), which reaches the minimum where the plain method stops on
   the valley's side (docs/validation.md).
@@ -117,7 +117,7 @@ Solver paths, before → after (each remaining one with its reason):
   fits, rows by arc-length fraction) is accurate for the lower half of the modes only (at (0.9,
   1.0), 16 → 24 modes: column errors 0.3–6 %, above it 12–56 %), which would save ~3 % of the BIE
   solves at (0.6, 1.94); ending a valley level once a fresh Jacobian's step achieves 90 % of its
-  promised decrease of |F|² (at (0.6, 1.94): 1358 BIE solves instead of 1745) leaves the 72- and
+  promised decrease of ``|F|²`` (at (0.6, 1.94): 1358 BIE solves instead of 1745) leaves the 72- and
   80-mode levels 2e-5 (V/U) and 0.1 (Δp⁺) from their certified minima, noise of the size of the
   differences the error estimate extrapolates. Also not adopted: the wall solve by an explicit
   inverse (a product instead of the locked ``lu_solve``; two concurrent evaluations at 96 modes
@@ -234,7 +234,7 @@ Solver paths, before → after (each remaining one with its reason):
   (3.96e-6 against 7.38e-6 in V/U; ``default_cases.py``), and the benchmark (0.6, 1.94) in
   fresh processes took 62.6 s (1292 BIE solves) against 62.2 s.
 * the valley method's Jacobian prolonged from the level below, kept until a step stalls →
-  replaced by a difference Jacobian once five steps with it together reduce |F| by less
+  replaced by a difference Jacobian once five steps with it together reduce ``|F|`` by less
   than 2 % (:data:`bem.newton.CRAWL_GAIN`; at (0.6, 1.94) its 48-mode level crawled 48 steps
   of ratio 0.990–0.999 before its first difference Jacobian). It changes only the long
   vesicles near lam_c started from carriers. Measured on 2 cores (BIE solves, modes, s):
@@ -361,13 +361,13 @@ from lubrication.checks import Deadline, InvalidParameterError, check_positive, 
 from lubrication.geometry import critical_length, resolve_confinement
 
 from .assembly import poiseuille
-from .drop import DropDiscretisation, DropOperator, _panels_for
-from .drop import _mode_count as _drop_mode_count  # one check, the vesicle's MAX_MODES
+from .drop import DropDiscretisation, DropOperator, panels_for
+from .drop import mode_count as _drop_mode_count  # one check, the vesicle's MAX_MODES
 from .membrane import bending_force, tension_basis, tension_force, tension_profile
 from .newton import difference_jacobian, levenberg_marquardt, valley_levenberg_marquardt
 from .quadrature import (
     DEFAULT_ORDER,
-    _serial,
+    assembles_serially,
     barycentric_weights,
     gauss_legendre,
     gauss_table,
@@ -615,7 +615,7 @@ class VesicleOperator(DropOperator):
         A_ab = np.zeros((2 * nw, 6 * nb))
         A_ba = np.zeros((6 * nb, 2 * nw))
         A_dd = np.zeros((2 * nb, 8 * nb))
-        serial = _serial(nw * nb)
+        serial = assembles_serially(nw * nb)
         (kernels.cross_far_taylor_serial if serial else kernels.cross_far_taylor)(
             wall.x, wall.r, wall.w, base.x, base.r, near_ab, near_ba, A_ab, A_ba)
         (kernels.self_far_taylor_serial if serial else kernels.self_far_taylor)(
@@ -717,10 +717,11 @@ def _range_projector(M: np.ndarray):
     return lambda X: X - U @ (U.T @ X)
 
 
-#: wall panels of the vesicle meshes, relative to the drop's rule (DropDiscretisation.wall_
-#: refinement): the single layer on the wall is smooth on the scale of the membrane panels, and
-#: a 4x coarser wall than the drop's changes V/U and Δp⁺ by < 1e-7 (relative) at (ν, λ) =
-#: (0.9, 1.0) and (0.6, 0.98 λc) while cutting the wall factorisation ~15x (validation.md).
+#: wall panels of the vesicle meshes, relative to the drop's rule
+#: (``DropDiscretisation.wall_refinement``): the single layer on the wall is smooth on the scale
+#: of the membrane panels, and a 4x coarser wall than the drop's changes V/U and Δp⁺ by < 1e-7
+#: (relative) at (ν, λ) = (0.9, 1.0) and (0.6, 0.98 λc) while cutting the wall factorisation ~15x
+#: (validation.md).
 #: 0.15 would change them by ≤ 6e-9 more, but leaves a 6e-5 error in the wall shear at the
 #: ends of the meshed tube (Poiseuille there), so the wall stays at 0.25
 WALL_REFINEMENT = 0.25
@@ -762,7 +763,7 @@ def vesicle_discretisation(n_modes: int, order: int = DEFAULT_ORDER,
     modes of (0.6, 1.94) 65 → 54 ms, outputs at its fixed minimum within 1.7e-8, but the
     default solve of (0.7, 0.95 lam_c) then ended with a γ_max estimate of half its true
     error, 0.075 against 0.137, ``default_cases.py``)."""
-    return DropDiscretisation(n_modes=n_modes, n_panels=n_panels or _panels_for(n_modes),
+    return DropDiscretisation(n_modes=n_modes, n_panels=n_panels or panels_for(n_modes),
                               order=order, wall_refinement=WALL_REFINEMENT,
                               wall_body_length=WALL_BODY_LENGTH,
                               wall_body_panels=WALL_BODY_PANELS)
@@ -1239,7 +1240,7 @@ def _within(err: dict, out: dict, tol: float, tension_tol: float) -> bool:
     return all(err[k] <= _tolerance(k, tol, tension_tol) * abs(out[k]) for k in _KEYS)
 
 
-def _check_inputs(nu, lam, lam_ratio, ca_b):
+def check_vesicle_case(nu, lam, lam_ratio, ca_b):
     nu, lam, lam_c = resolve_confinement(
         nu, lam, lam_ratio, nu_reason="a vesicle with excess area (nu < 1) is needed")
     ca_b = float(check_positive("ca_b", ca_b, reason="Ca_B = eta U R0^2/kappa"))
@@ -1251,7 +1252,7 @@ def _check_inputs(nu, lam, lam_ratio, ca_b):
     return nu, lam, lam_c, ca_b
 
 
-def _mode_count(name, value) -> int:
+def mode_count(name, value) -> int:
     """An integer number of shape modes, 8 <= value <= MAX_MODES (the vesicle's envelope)."""
     return _drop_mode_count(name, value, 8, MAX_MODES)
 
@@ -1265,19 +1266,19 @@ def check_vesicle_inputs(nu, lam=None, *, lam_ratio=None, ca_b=50.0, n_modes=Non
     residual_tol, max_modes, rung_modes, density_terms, max_iter) as Python numbers
     (``max_modes`` None stays None: chosen from the vesicle's length). Raises
     :class:`InvalidParameterError` (or CannotPassError for lam >= lam_c) naming the input."""
-    nu, lam, lam_c, ca_b = _check_inputs(nu, lam, lam_ratio, ca_b)
+    nu, lam, lam_c, ca_b = check_vesicle_case(nu, lam, lam_ratio, ca_b)
     tol = float(check_range("tol", tol, 1e-12, 0.5))
     tension_tol = float(check_range("tension_tol", tension_tol, 1e-12, 0.5))
     residual_tol = float(check_range("residual_tol", residual_tol, 1e-14, 10.0))
     if max_modes is not None:
-        max_modes = _mode_count("max_modes", max_modes)
+        max_modes = mode_count("max_modes", max_modes)
     if n_modes is not None:
-        n_modes = _mode_count("n_modes", n_modes)
+        n_modes = mode_count("n_modes", n_modes)
     elif max_modes is not None and max_modes < 24:
         raise InvalidParameterError("max_modes", max_modes, f"24 <= max_modes <= {MAX_MODES}",
                                     "the automatic refinement solves 16, 24, ... modes and "
                                     "needs a pair; for a single coarse solve give n_modes")
-    rung_modes = _mode_count("rung_modes", rung_modes)
+    rung_modes = mode_count("rung_modes", rung_modes)
     density_terms = int(check_range("density_terms", density_terms, 1, 64))
     max_iter = int(check_range("max_iter", max_iter, 1, 1000))
     if max_time is not None:

@@ -71,7 +71,7 @@ from lubrication.checks import (
 )
 
 from .assembly import poiseuille
-from .drop import _shape_velocity_matrix
+from .drop import shape_velocity_matrix
 from .membrane import tension_profile
 from .newton import difference_jacobian
 from .quadrature import PanelSet, barycentric_weights, gauss_legendre
@@ -203,7 +203,7 @@ def vesicle_flow(op, curve: SpectralCurve, G: np.ndarray | None = None) -> Vesic
     V = centroid_velocity(panels, un, op.volume)
     sw = np.sqrt(panels.w.ravel())
     if G is None:
-        G = _shape_velocity_matrix(op, curve.modes)
+        G = shape_velocity_matrix(op, curve.modes)
     rate, *_ = np.linalg.lstsq(sw[:, None] * G, sw * (un - V * nx), rcond=None)
     op.evaluations += 1
     return VesicleFlow(curve=curve, panels=panels, g=g, V=V, dp=float(dp0 + dp @ g), ux=ux,

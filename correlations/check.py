@@ -54,7 +54,7 @@ row's uncertainty: the linear sum (both are treated as bounds, as the map adds i
 parts), so that two results that are each within their stated error never fail. The row's
 uncertainty of a value is its ``<column>_err`` cell when given (absolute, same unit), else
 half a unit of the last digit written (a value written "1.4218" is known to ±5e-5). Verdict:
-pass when |deviation| ≤ tolerance, warn when ≤ :data:`WARN_FACTOR` × tolerance, fail beyond.
+pass when ``|deviation|`` ≤ tolerance, warn when ≤ :data:`WARN_FACTOR` × tolerance, fail beyond.
 The row's verdict is its worst check; the report's, its worst row.
 """
 
@@ -552,13 +552,13 @@ def _resolve_map(choice):
     """The map to read: None the shipped one, False none, a path or a SolutionMap (as the
     estimate's map rows, :mod:`correlations.registry`); the reason (:class:`_NoMap`) when there
     is none. A path that is not a map raises InvalidParameterError (``map``)."""
-    from .registry import MethodNotApplicable, _solution_map
+    from .registry import MethodNotApplicable, resolve_solution_map
     if isinstance(choice, _NoMap):
         return choice
     if choice is False:
         return _NoMap("the solution map is switched off")
     try:
-        return _solution_map(choice)
+        return resolve_solution_map(choice)
     except MethodNotApplicable as exc:
         return _NoMap(str(exc))
 
@@ -570,7 +570,7 @@ def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
     :func:`correlations.solution_map.query_map` at (ν, λ/λc, Ca_B): stored steady BEM and
     lubrication solutions interpolated in δ^(1/2), log Ca_B and ν, error = interpolation +
     solver + model error. Where the map cannot say a part, a stand-in is added and named in
-    the note: an unknown solver error is :data:`MAP_UNKNOWN_SOLVER_RTOL` × |value| (the
+    the note: an unknown solver error is :data:`MAP_UNKNOWN_SOLVER_RTOL` × ``|value|`` (the
     map's BEM tolerance); an unknown lubrication model error (a Ca_B line without a BEM point
     to compare with) is the relative model error at Ca_B = :data:`DEFAULT_CA_B` plus the change
     of the value from that Ca_B. Returns the reason (str) when the map has no usable value.
@@ -578,7 +578,7 @@ def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
     ``quantity``: ``V_over_U``, ``dp_plus_R0``, ``ell``, ``film_min`` or ``shape_class``;
     ``solution_map`` as in :func:`check_results`.
     """
-    from .registry import _map_query, map_method_name
+    from .registry import map_query, map_method_name
     from .solution_map import outside_reason
     m = _resolve_map(solution_map)
     if isinstance(m, _NoMap):
@@ -587,7 +587,7 @@ def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
     reason = outside_reason(m, nu, ratio, ca_b)
     if reason:
         return f"outside the solution map ({reason})"
-    v = _map_query(nu, ratio, ca_b, m).quantities[quantity]
+    v = map_query(nu, ratio, ca_b, m).quantities[quantity]
     if v.value is None:
         return f"solution map: {v.note}"
     source = f"solution map, {map_method_name(v.methods)}"
@@ -604,7 +604,7 @@ def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
         notes.append(f"solver error unknown: {MAP_UNKNOWN_SOLVER_RTOL:g} x value used")
     if v.model_error is None:
         w = (None if ca_b == DEFAULT_CA_B or outside_reason(m, nu, ratio, DEFAULT_CA_B)
-             else _map_query(nu, ratio, DEFAULT_CA_B, m).quantities[quantity])
+             else map_query(nu, ratio, DEFAULT_CA_B, m).quantities[quantity])
         if w is None or w.value is None or w.model_error is None:
             return f"solution map: lubrication model error unknown at Ca_B={ca_b:g}"
         stand_in = w.model_error / abs(w.value) * abs(v.value) + abs(v.value - w.value)
@@ -617,7 +617,7 @@ def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
 def near_critical_reference(nu: float, lam: float, quantity: str) -> Reference | str:
     r"""Near-critical asymptote of V/U or Δp⁺R0/(ηU) for δ = 1 − λ/λc ≤ 0.1, with its error.
 
-    V/U: Chen et al. 2020 eq. asmyp1 (Barakat & Shaqfeh 2018a), error |s − 1|δ +
+    V/U: Chen et al. 2020 eq. asmyp1 (Barakat & Shaqfeh 2018a), error ``|s − 1| δ`` +
     :data:`NEAR_CRITICAL_SPEED_K` δ^(3/2) with s its slope
     (:func:`lubrication.asymptotics.speed_slope_near_critical`): our lubrication and BEM
     solutions have slope 1 (physics notes §4). Δp⁺: eq. asmyp2, error
@@ -710,16 +710,16 @@ def small_object_reference(kind: str, lam: float, quantity: str, nu: float = 1.0
 def _sphere_solution(lam: float):
     from bem.solve import solve_sphere
 
-    from .registry import _guarded
-    return _guarded(solve_sphere, lam)
+    from .registry import guarded
+    return guarded(solve_sphere, lam)
 
 
 @functools.lru_cache(maxsize=256)
 def _drop_solution(lam: float, ca: float):
     from bem.drop import solve_drop
 
-    from .registry import _guarded
-    return _guarded(solve_drop, lam, ca)
+    from .registry import guarded
+    return guarded(solve_drop, lam, ca)
 
 
 def _exact(value: float, what: str) -> Reference:

@@ -321,7 +321,7 @@ def figure_shapes_cab(ctx):
                      + (" (cached)" if cached else f" in {d['seconds']:.0f} s"))
         sols.append(d)
     fig, (ax,) = _new_figure(1, 1, (8.0, 3.4))
-    from bem.plotting import _draw_tube
+    from bem.plotting import draw_tube
     half = 1.5
     for d, color in zip(sols, ("tab:blue", "tab:green", "tab:orange", "tab:red")):
         if not d["success"]:
@@ -331,7 +331,7 @@ def figure_shapes_cab(ctx):
         half = max(half, 0.6 * float(np.ptp(x)) + 0.3)
         ax.plot(x, r, color=color, label=f"Ca_B = {d['ca_b']:g}")
         ax.plot(x, -r, color=color)
-    _draw_tube(ax, half)
+    draw_tube(ax, half)
     ax.legend(fontsize="small", loc="lower right")
     failed = [f"{d['ca_b']:g}" for d in sols if not d["success"]]
     ax.set_title("ν = 0.84, λ = 1 (BEM)" + (f"; NOT CONVERGED: Ca_B = {', '.join(failed)}"

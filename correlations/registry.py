@@ -23,7 +23,7 @@ Numerical solvers (the lubrication BVP, :mod:`lubrication.solve`; the BEM vesicl
 Map rows (used unless the caller disables the map: ``solution_map=False``, ``--no-map``)
 --------------------------------------------------------------------------------------------
 One :func:`~correlations.solution_map.query_map` per (nu, lam/lam_c, Ca_B) serves every map row
-(:func:`_map_query`, cached); the file is read only when an estimate runs. Ca_B is the case's
+(:func:`map_query`, cached); the file is read only when an estimate runs. Ca_B is the case's
 (eta U R0^2/kappa from the physical inputs), or :data:`MAP_DEFAULT_CA_B` = 50 (Chen et al.
 2020's value) when the dimensionless estimate has none; the estimate states which. A row has a
 value wherever the query returns one; elsewhere its reason (outside the map's nu, lam/lam_c or
@@ -38,31 +38,33 @@ lubrication, interpolated)" after the methods of the nodes used, and the error b
 map's: interpolation + solver + model error, the parts that are known (module docstring of
 :mod:`correlations.solution_map`).
 
-====================  =============================  ==============================================
-quantity              methods, in order of preference  validity (range constant, with its source)
-====================  =============================  ==============================================
-V_over_U              solution_map                   inside the map (query_map returns a value)
-                      small_sphere_faxen             lam <= 0.5, nu >= 0.9 (SMALL_VESICLE_RANGE)
-                      near_critical_barakat2018a     delta <= 0.1 (asymptotics.NEAR_CRITICAL_RANGE)
-film                  solution_map (minimum gap)     inside the map
-                      geometric_chen2020             delta <= 0.1 (film.FILM_RANGE_CHEN2020)
-ell                   solution_map                   inside the map
-                      length_chen2020                delta <= 0.1, nu >= 0.6 (shape.LENGTH_RANGE_CHEN2020)
-dp_plus_R0            solution_map                   inside the map
-                      small_sphere_faxen             lam <= 0.5, nu >= 0.9
-                      film_scaling_chen2020          delta <= 0.1 (pressure.DP_PLUS_FILM_RANGE_CHEN2020)
-                      near_critical_barakat2018a     delta <= 0.1
-shape_class           solution_map                   inside the map, neighbours of one class
-                      transition_chen2020            0.6 <= nu, 0.6 <= lam <= 1.94, 10 <= Ca_B <= 1e4
-tension_front         solution_map                   inside the map
-                      film_inverse_chen2020          Ca_v <= 1e-2, i.e. film <= 0.093
-tension_max           solution_map                   inside the map (no closed form)
-tube_hematocrit       single_file_flux               d <= 8 um (viscosity.CHEN2020_RANGE)
-                      fahraeus_pries1992             3.3 <= d <= 1978 um (viscosity.FAHRAEUS_RANGE)
-discharge_hematocrit  single_file_flux, fahraeus...  as tube_hematocrit
-eta_rel               single_file_chen2020           d <= 8 um, dp_plus_R0 and H_T valid
-                      pries1992_in_vitro             3.3 <= d <= 1978 um, H_D <= 0.9
-====================  =============================  ==============================================
+::
+
+    ====================  =============================  ==============================================
+    quantity              methods, in order of preference  validity (range constant, with its source)
+    ====================  =============================  ==============================================
+    V_over_U              solution_map                   inside the map (query_map returns a value)
+                          small_sphere_faxen             lam <= 0.5, nu >= 0.9 (SMALL_VESICLE_RANGE)
+                          near_critical_barakat2018a     delta <= 0.1 (asymptotics.NEAR_CRITICAL_RANGE)
+    film                  solution_map (minimum gap)     inside the map
+                          geometric_chen2020             delta <= 0.1 (film.FILM_RANGE_CHEN2020)
+    ell                   solution_map                   inside the map
+                          length_chen2020                delta <= 0.1, nu >= 0.6 (shape.LENGTH_RANGE_CHEN2020)
+    dp_plus_R0            solution_map                   inside the map
+                          small_sphere_faxen             lam <= 0.5, nu >= 0.9
+                          film_scaling_chen2020          delta <= 0.1 (pressure.DP_PLUS_FILM_RANGE_CHEN2020)
+                          near_critical_barakat2018a     delta <= 0.1
+    shape_class           solution_map                   inside the map, neighbours of one class
+                          transition_chen2020            0.6 <= nu, 0.6 <= lam <= 1.94, 10 <= Ca_B <= 1e4
+    tension_front         solution_map                   inside the map
+                          film_inverse_chen2020          Ca_v <= 1e-2, i.e. film <= 0.093
+    tension_max           solution_map                   inside the map (no closed form)
+    tube_hematocrit       single_file_flux               d <= 8 um (viscosity.CHEN2020_RANGE)
+                          fahraeus_pries1992             3.3 <= d <= 1978 um (viscosity.FAHRAEUS_RANGE)
+    discharge_hematocrit  single_file_flux, fahraeus...  as tube_hematocrit
+    eta_rel               single_file_chen2020           d <= 8 um, dp_plus_R0 and H_T valid
+                          pries1992_in_vitro             3.3 <= d <= 1978 um, H_D <= 0.9
+    ====================  =============================  ==============================================
 
 Tensions are in eta V in the table (``tension_front`` is Chen et al.'s inverse vesicle capillary
 number 1/Ca_v = gamma_F/(eta V), eqs. sfilm4, tension2). The map and the solvers give gamma/(eta
@@ -74,16 +76,16 @@ back by the same V/U, carry exactly the map's error bar.
 
 Opt-in solver rows (used first when the caller enables the solver, e.g. ``--solver
 lubrication``; otherwise the estimate only notes that the solver covers the case). With both
-enabled the BEM rows come first (most accurate, slowest), then the lubrication rows:
+enabled the BEM rows come first (most accurate, slowest), then the lubrication rows::
 
-====================  =============================  ==============================================
-V/U, film (minimum     bem_vesicle                    0.6 <= nu <= 0.98, delta >= 0.02, i.e.
-gap), ell, dp+, shape,                                lam/lam_c <= 0.98 (BEM_RANGE), tol 1e-2; Ca_B
-front and max tension                                 from the case, 50 if unknown; minutes/point
-V/U, film (minimum     lubrication_solver             0.6 <= nu <= 0.98, delta <= 0.05
-gap), ell, dp+, shape,                                (LUBRICATION_RANGE); Ca_B from the case, 50 if
-front and max tension                                 unknown; seconds per point
-====================  =============================  ==============================================
+    ====================  =============================  ==============================================
+    V/U, film (minimum     bem_vesicle                    0.6 <= nu <= 0.98, delta >= 0.02, i.e.
+    gap), ell, dp+, shape,                                lam/lam_c <= 0.98 (BEM_RANGE), tol 1e-2; Ca_B
+    front and max tension                                 from the case, 50 if unknown; minutes/point
+    V/U, film (minimum     lubrication_solver             0.6 <= nu <= 0.98, delta <= 0.05
+    gap), ell, dp+, shape,                                (LUBRICATION_RANGE); Ca_B from the case, 50 if
+    front and max tension                                 unknown; seconds per point
+    ====================  =============================  ==============================================
 
 The BEM is never run unless the caller enables it, not even where no other method is valid:
 there the estimate only says that the BEM covers the case (a solve takes minutes). One solve per
@@ -216,7 +218,7 @@ class _Failed:
     message: str
 
 
-def _guarded(solve, *args, **kwargs):
+def guarded(solve, *args, **kwargs):
     """``solve(*args, **kwargs)``, or a :class:`_Failed` carrying the reason when it raises.
 
     A solver that raises (bad state, a linear-algebra or floating-point failure) produces no
@@ -232,7 +234,7 @@ def _guarded(solve, *args, **kwargs):
 @functools.lru_cache(maxsize=16)
 def _lubrication_solution(nu: float, lam: float, ca_b: float):
     from lubrication.solve import solve_lubrication
-    return _guarded(solve_lubrication, nu, lam, ca_b=ca_b)
+    return guarded(solve_lubrication, nu, lam, ca_b=ca_b)
 
 
 # BEM vesicle (bem.vesicle): the full Stokes problem, no lubrication approximation. Validated for
@@ -254,7 +256,7 @@ def _bem_result(nu: float, lam: float, ca_b: float):
     """One :func:`bem.vesicle.solve_vesicle` per (nu, lam, Ca_B) to BEM_TOLERANCES, converged
     or not (minutes)."""
     from bem import vesicle  # lazy: numba loads only when the BEM is enabled
-    return _guarded(vesicle.solve_vesicle, nu, lam, ca_b=ca_b, **BEM_TOLERANCES)
+    return guarded(vesicle.solve_vesicle, nu, lam, ca_b=ca_b, **BEM_TOLERANCES)
 
 
 #: Table quantities a solver or the map gives, with the name of each in their results.
@@ -315,7 +317,7 @@ _MAP_SOURCE = ("solution map (correlations.solution_map): stored BEM and lubrica
                "interpolated")
 
 
-def _solution_map(choice):
+def resolve_solution_map(choice):
     """The map the rows read: ``choice`` None for the shipped map (the rows have no value when
     none is shipped), or a path or :class:`~correlations.solution_map.SolutionMap`."""
     from .solution_map import DEFAULT_MAP, SolutionMap, load_map
@@ -327,7 +329,7 @@ def _solution_map(choice):
 
 
 @functools.lru_cache(maxsize=32)
-def _map_query(nu: float, lam_ratio: float, ca_b: float, solution_map):
+def map_query(nu: float, lam_ratio: float, ca_b: float, solution_map):
     """One :func:`~correlations.solution_map.query_map` per case and map: serves every map row."""
     from .solution_map import query_map
     return query_map(nu, lam_ratio, ca_b, solution_map)
@@ -346,9 +348,9 @@ def map_method_name(methods) -> str:
 def _map_row(quantity: str, key: str):
     """``evaluate`` of the map row of ``quantity`` (``key`` its name in the map)."""
     def evaluate(s: dict) -> Answer:
-        m = _solution_map(s.get("solution_map"))
+        m = resolve_solution_map(s.get("solution_map"))
         ca_b = s.get("ca_b", MAP_DEFAULT_CA_B)
-        res = _map_query(s["nu"], s["lam"] / s["lam_c"], ca_b, m)
+        res = map_query(s["nu"], s["lam"] / s["lam_c"], ca_b, m)
         v = res.quantities[key]
         if v.value is None:
             raise MethodNotApplicable(v.note)

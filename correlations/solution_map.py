@@ -90,7 +90,7 @@ error in the median) and on maps with every other ν node, or some λ/λc nodes,
 the coverage numbers of both are in docs/validation.md (solution map). Dividing by 4 instead
 lowered the coverage on the coarsened maps to about half of the points.
 ``solver_error``: the solver's own error estimate (BEM refinement
-pair |fine − coarse| for V/U, Δp⁺ and γ_max; none otherwise) propagated with the interpolation
+pair ``|fine − coarse|`` for V/U, Δp⁺ and γ_max; none otherwise) propagated with the interpolation
 weights; None when a neighbour has none. ``model_error``: see the rule above (and the Ca_B clamp
 below). ``error`` = the sum of the known parts, in the quantity's units.
 

@@ -103,7 +103,7 @@ def _gap_flow_exact(r, d, Q):
     return G, e_m, e_w
 
 
-def _gap_flow(r, Q):
+def gap_flow(r, Q):
     """G, e_m, e_w of the annular gap, exact or series below SERIES_GAP (no checks, 0 < r < 1)."""
     r, Q = np.broadcast_arrays(np.asarray(r, dtype=float), np.asarray(Q, dtype=float))
     d = 1.0 - r
@@ -160,7 +160,7 @@ def gap_velocity(rho, r, Q):
     r = float(_check_radius(r))
     Q = float(as_finite("Q", Q))
     rho = check_range("rho", rho, r, 1.0, reason="rho lies in the gap between membrane and wall")
-    G = float(_gap_flow(r, Q)[0])
+    G = float(gap_flow(r, Q)[0])
     B = (1.0 + 0.25 * G * (1.0 - r * r)) / math.log(r)
     return scalar_or_array(0.25 * G * (rho**2 - r * r) + B * np.log(rho / r))
 
@@ -193,7 +193,7 @@ def pressure_gradient(r, Q):
     >>> round(pressure_gradient(0.9, 0.05), 4)
     -305.2106
     """
-    return scalar_or_array(_gap_flow(_check_radius(r), as_finite("Q", Q))[0])
+    return scalar_or_array(gap_flow(_check_radius(r), as_finite("Q", Q))[0])
 
 
 def membrane_shear_rate(r, Q):
@@ -222,7 +222,7 @@ def membrane_shear_rate(r, Q):
     >>> round(membrane_shear_rate(0.9, 0.05), 6)
     4.997226
     """
-    return scalar_or_array(_gap_flow(_check_radius(r), as_finite("Q", Q))[1])
+    return scalar_or_array(gap_flow(_check_radius(r), as_finite("Q", Q))[1])
 
 
 def wall_shear_rate(r, Q):
@@ -249,7 +249,7 @@ def wall_shear_rate(r, Q):
     >>> round(wall_shear_rate(0.9, 0.05), 5)
     -24.4975
     """
-    return scalar_or_array(_gap_flow(_check_radius(r), as_finite("Q", Q))[2])
+    return scalar_or_array(gap_flow(_check_radius(r), as_finite("Q", Q))[2])
 
 
 def pressure_gradient_series(d, Q):
@@ -349,7 +349,7 @@ def spherical_cap(curvature, rim_radius):
     Parameters
     ----------
     curvature : float or ndarray
-        Cap curvature k [1/R], with |k rim_radius| < 1.
+        Cap curvature k [1/R], with ``|k rim_radius|`` < 1.
     rim_radius : float
         Rim radius epsilon [R].
 
@@ -395,7 +395,7 @@ D_FLOOR = 1e-8
 
 def _clipped_gap_flow(r, Q):
     r_eval = np.clip(r, R_FLOOR, 1.0 - D_FLOOR)
-    return _gap_flow(r_eval, Q)
+    return gap_flow(r_eval, Q)
 
 
 def rhs_high_ca(t, y, params):

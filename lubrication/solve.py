@@ -20,7 +20,7 @@ The method, in the order of this module:
 4. **High-Ca boundary-value problem** (:func:`lubrication.equations.rhs_high_ca`, 6 unknown
    functions, unknown parameters Q and the arc length S, 8 boundary conditions) by
    :func:`scipy.integrate.solve_bvp`. Pressure and tension are divided by a tension scale so
-   that every unknown is O(1): solve_bvp measures residuals relative to 1 + |f|, and unscaled
+   that every unknown is O(1): solve_bvp measures residuals relative to 1 + ``|f|``, and unscaled
    tensions of 1e5 put a round-off floor above the tolerance at the poles (the "maximum number
    of mesh nodes exceeded" trap).
 5. **Bending problem** (:func:`lubrication.equations.rhs_bending`, 8 functions, 10 conditions),
@@ -75,7 +75,7 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid, solve_bvp
 
 from .checks import CannotPassError, Deadline, InvalidParameterError, check_range
-from .equations import (BENDING_STATE, HIGH_CA_STATE, _gap_flow, capillary_number, rhs_bending,
+from .equations import (BENDING_STATE, HIGH_CA_STATE, gap_flow, capillary_number, rhs_bending,
                         rhs_high_ca, spherical_cap)
 from .geometry import critical_confinement, critical_length
 from .io import provenance
@@ -510,8 +510,8 @@ def _diagnose(prob, model, sol, y):
     # Net axial force on the vesicle: shear e_m cos(psi) and pressure -p sin(psi) on the body,
     # pressure on the projected area of each cap (uniform there); the units cancel in the ratio.
     ca = 1.0 if model == "high-Ca" else capillary_number(prob.ca_b, prob.lam, Q)
-    e_m = _gap_flow(np.clip(r, 1e-12, 1 - 1e-15), Q)[1]
-    e_m_mid = _gap_flow(np.clip(r_m, 1e-12, 1 - 1e-15), Q)[1]
+    e_m = gap_flow(np.clip(r, 1e-12, 1 - 1e-15), Q)[1]
+    e_m_mid = gap_flow(np.clip(r_m, 1e-12, 1 - 1e-15), Q)[1]
     shear = _simpson_cumulative(2 * math.pi * S * r * ca * e_m * np.cos(psi), t,
                                 2 * math.pi * S * r_m * ca * e_m_mid * np.cos(psi_m))[-1]
     press_f = _simpson_cumulative(-2 * math.pi * S * r * p * np.sin(psi), t,
@@ -597,7 +597,7 @@ def _result(prob, model, sol, y, diag, message, timings):
     x = np.concatenate(([0.0], x_body, [x_body[-1] + height_f]))
     x -= x.min()
     length = float(x.max())
-    _, e_m, e_w = _gap_flow(r, Q)
+    _, e_m, e_w = gap_flow(r, Q)
     # Outputs in U units: V/U = 1/(1 - Q) converts eta V to eta U
     to_u = 1.0 / (1.0 - Q)
     delta_p = p_v[0] - p_v[-1]                                      # eta V / R

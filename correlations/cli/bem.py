@@ -244,12 +244,12 @@ def _sweep_text(table, title: str) -> str:
 
 def cmd_bem_vesicle_sweep(args):
     """Steady vesicles over a range of confinements at fixed nu (continuation in lam)."""
-    from bem.sweep import _confinements
+    from bem.sweep import confinements
     from bem.vesicle import check_vesicle_inputs
     points = _sweep_values(args)
     solver = _vesicle_solver_options(args)
     with _options_named():
-        _, lams, _, _ = _confinements(args.nu, points.get("lams"), points.get("lam_ratios"),
+        _, lams, _, _ = confinements(args.nu, points.get("lams"), points.get("lam_ratios"),
                                       args.ca_b)
         check_vesicle_inputs(args.nu, float(lams[0]), ca_b=args.ca_b, max_time=args.max_time,
                              **solver)

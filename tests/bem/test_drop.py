@@ -16,7 +16,7 @@ from bem.drop import (
     DropDiscretisation,
     DropOperator,
     _outputs,
-    _panels_for,
+    panels_for,
     _solve_stage,
     newton_drop,
     relax_drop,
@@ -211,7 +211,7 @@ def test_steady_state_stays_put(drop01, report):
     3e-8, modes move < 1e-8, V unchanged to 1e-9)."""
     n = drop01.panels["modes"]
     curve = drop01.curve()
-    op = DropOperator(0.8, 0.1, DropDiscretisation(n, _panels_for(n)), curve)
+    op = DropOperator(0.8, 0.1, DropDiscretisation(n, panels_for(n)), curve)
     modes, state, info = relax_drop(op, curve.modes, 0.05)
     assert not info["failure"] and info["steps"] >= 5
     report.value("drop.relax_residual", state.max_residual(), reference=0.0, tol=1e-6,
@@ -234,7 +234,7 @@ def test_residual_falls_spectrally_with_the_number_of_modes(drop01, report):
     ns = np.array([12, 16, 24])
     res = []
     for n in ns:
-        rep, op = _solve_stage(0.8, 0.1, DropDiscretisation(int(n), _panels_for(int(n))), seed,
+        rep, op = _solve_stage(0.8, 0.1, DropDiscretisation(int(n), panels_for(int(n))), seed,
                                drop01.V_over_U, seed.density)
         assert rep.success, rep.message
         res.append(_outputs(0.8, op, rep)["residual"])
@@ -343,7 +343,7 @@ def test_ca_0p3_value_does_not_depend_on_the_tube_discretisation(drop03, report)
     (measured <= 1.2e-12 relative)."""
     seed = drop03.curve()
     n = drop03.panels["modes"]
-    base = DropDiscretisation(n, _panels_for(n))
+    base = DropDiscretisation(n, panels_for(n))
     largest = 0.0
     for change in ({"wall_refinement": 2.0}, {"order": 24, "quad_tol": 1e-13},
                    {"tube_tol": 1e-15}):
@@ -366,7 +366,7 @@ def _convergence_study(ca, ns, base=None):
     outs = []
     prev, V = seed, base.V_over_U
     for n in ns:
-        rep, op = _solve_stage(0.8, ca, DropDiscretisation(int(n), _panels_for(int(n))), prev, V,
+        rep, op = _solve_stage(0.8, ca, DropDiscretisation(int(n), panels_for(int(n))), prev, V,
                                seed.density)
         assert rep.success, rep.message
         outs.append(_outputs(0.8, op, rep))
@@ -427,7 +427,7 @@ def test_error_estimate_bounds_the_actual_error(drop03, report):
     """Ca = 0.3: the reported |fine - coarse| exceeds the difference to a 48-mode solution."""
     res = drop03
     seed = res.curve()
-    rep, op = _solve_stage(0.8, 0.3, DropDiscretisation(48, _panels_for(48)), seed, res.V_over_U,
+    rep, op = _solve_stage(0.8, 0.3, DropDiscretisation(48, panels_for(48)), seed, res.V_over_U,
                            seed.density)
     fine = _outputs(0.8, op, rep)
     for key in ("V_over_U", "dp_plus_R"):

@@ -261,11 +261,11 @@ def test_pole_integrals_match_one_fine_gauss_rule_per_point():
     <= h/u, i.e. PIECE (q + 2 PIECE/q) eps max g; the direct rule n eps sum|terms| with n its
     nodes; both evaluate the integrand (:func:`_integrand_rounding`). Half as many pieces move
     the integrals of the rough 96-mode curve by 2e-10."""
-    from bem.shape import _gauss01
+    from bem.shape import gauss_legendre01
     rng = np.random.default_rng(3)
     for n, j, amp in ((64, 16, 0.01), (96, 16, 0.02), (8, 0, 0.1)):
         c = SpectralCurve(rng.normal(size=n) * amp, 10.0, 0.0, rng.normal(size=j) * 0.02)
-        t, w = _gauss01(4 * c._quad)
+        t, w = gauss_legendre01(4 * c._quad)
         q = max(1, math.ceil(c._quad / 8) - 1)            # pieces after the first, u <= 1/2
         g_max = 1 + np.sum(np.abs(c.density))
         own = EPS * g_max * (2 * _integrand_rounding(c)

@@ -68,7 +68,7 @@ def bench_estimate(repeat: int = 20) -> dict:
     first = estimate()
     out["first call (reads the map)"] = [1e3 * (time.perf_counter() - t0)]
     for diameter in (4.0, 3.0):
-        registry._map_query.cache_clear()
+        registry.map_query.cache_clear()
         times = []
         for k in range(repeat):
             t0 = time.perf_counter()

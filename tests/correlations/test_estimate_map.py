@@ -45,10 +45,10 @@ def count_queries(monkeypatch):
     def counting(*args, **kwargs):
         calls.append(args)
         return real(*args, **kwargs)
-    registry._map_query.cache_clear()
+    registry.map_query.cache_clear()
     monkeypatch.setattr(sm, "query_map", counting)
     yield calls
-    registry._map_query.cache_clear()
+    registry.map_query.cache_clear()
 
 
 # ----------------------------------------------------------------------------- (a) map values
