@@ -49,11 +49,9 @@ def cmd_bem_sphere(args):
     """Free rigid sphere of radius lam R on the axis of Poiseuille flow."""
     from correlations.cli.contract import format_rows
 
-    from bem.solve import check_sphere_inputs
-    with _options_named():
-        check_sphere_inputs(args.lam, panels=args.panels, tol=args.tol, max_time=args.max_time)
     from bem.solve import solve_sphere
-    res = solve_sphere(args.lam, panels=args.panels, tol=args.tol, max_time=args.max_time)
+    with _options_named():           # the solver checks its inputs before any BEM work
+        res = solve_sphere(args.lam, panels=args.panels, tol=args.tol, max_time=args.max_time)
     ok = bool(res.converged)
     out = {"command": "bem", "subcommand": "sphere"}
     out.update(res.to_dict())
@@ -116,13 +114,10 @@ def cmd_bem_drop(args):
     """Steady clean drop (viscosity ratio 1, constant tension) on the axis."""
     from correlations.cli.contract import format_rows
 
-    from bem.drop import check_drop_inputs
-    with _options_named():
-        check_drop_inputs(args.lam, args.ca, n_modes=args.modes, tol=args.tol,
-                          max_time=args.max_time)
     from bem.drop import solve_drop
-    res = solve_drop(args.lam, args.ca, n_modes=args.modes, tol=args.tol,
-                     max_time=args.max_time)
+    with _options_named():           # the solver checks its inputs before any BEM work
+        res = solve_drop(args.lam, args.ca, n_modes=args.modes, tol=args.tol,
+                         max_time=args.max_time)
     out = _shape_result_json(res, "drop", args)
     method, pm = _method_and_error(res)
     ok = bool(res.success)
@@ -157,13 +152,10 @@ def cmd_bem_vesicle(args):
     """Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the axis."""
     from correlations.cli.contract import format_rows
 
-    from bem.vesicle import check_vesicle_inputs
-    with _options_named():
-        check_vesicle_inputs(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
-                             max_time=args.max_time, **_vesicle_solver_options(args))
     from bem.vesicle import solve_vesicle
-    res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
-                        max_time=args.max_time, **_vesicle_solver_options(args))
+    with _options_named():           # the solver checks its inputs before any BEM work
+        res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
+                            max_time=args.max_time, **_vesicle_solver_options(args))
     out = _shape_result_json(res, "vesicle", args)
     method, pm = _method_and_error(res)
     ok = bool(res.success)
