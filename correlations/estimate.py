@@ -337,7 +337,6 @@ def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapola
                    **geometric, **quantities, **derived}
 
 
-# Its Raises/Examples sections read like the laws' on purpose: each documents its own (STYLE.md).
 def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
                            tube_hematocrit: float | None = None,
                            discharge_hematocrit: float | None = None,

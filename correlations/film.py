@@ -27,8 +27,6 @@ __all__ = [
     "capillary_from_film_chen2020",
 ]
 
-# Docstring sections repeat on purpose: each published law documents its nu, lam (STYLE.md).
-
 #: Prefactor of eq. sfilm4 fitted to the BEM films of Chen et al. 2020 (Ca_v < 1e-2).
 C0_CHEN2020 = 2.0
 #: Immobile-interface Bretherton constant 0.643 * 6**(2/3) ≈ 2.123 (Secomb et al. 1986).
@@ -53,24 +51,13 @@ def film_thickness_chen2020(nu, lam):
 
     Chen et al. 2020 eq. sfilm2 (from the geometric expansion of Barakat & Shaqfeh 2018a); the
     BEM films approach it for :math:`1 - \lambda/\lambda_c < 0.1` (:data:`FILM_RANGE_CHEN2020`,
-    warned outside).
-
-    Parameters
-    ----------
-    nu : float or array_like
-        Reduced volume, 0 < nu <= 1 [-].
-    lam : float or array_like
-        Confinement R0/R, 0 < lam < lam_c(nu) [-].
+    warned outside). It is :func:`~lubrication.geometry.clearance` with that warning, and takes
+    its ``nu`` and ``lam``: lam >= lam_c(nu) raises :class:`~lubrication.checks.CannotPassError`.
 
     Returns
     -------
     delta : float or ndarray
         Film thickness h/R [-].
-
-    Raises
-    ------
-    CannotPassError
-        If lam >= lam_c(nu).
 
     Examples
     --------

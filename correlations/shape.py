@@ -26,8 +26,6 @@ __all__ = [
     "length_chen2020",
 ]
 
-# Docstring sections repeat on purpose: each published law documents its nu, lam (STYLE.md).
-
 # Coefficients of eq. transition, nu_T = A - B lam (linear fit to the BEM transition points).
 _A, _B = 1.126, 0.29
 
@@ -98,12 +96,8 @@ def transition_confinement_chen2020(nu):
     Inverse of :func:`transition_reduced_volume_chen2020` (Chen et al. 2020 eq. transition).
     A vesicle of reduced volume ``nu`` is a parachute for :math:`\lambda < \lambda_T` and a bullet
     above. For nu = 0.6 (red blood cells) :math:`\lambda_T \approx 1.81`, the paper's
-    ":math:`\lambda_T(0.6) \simeq 1.8`". Warned outside 0.6 <= nu <= 0.93.
-
-    Parameters
-    ----------
-    nu : float or array_like
-        Reduced volume, 0 < nu <= 1 [-].
+    ":math:`\lambda_T(0.6) \simeq 1.8`". Warned outside 0.6 <= nu <= 0.93; ``nu`` as in
+    :func:`~lubrication.geometry.critical_confinement`.
 
     Returns
     -------
@@ -132,10 +126,9 @@ def shape_class_chen2020(nu, lam, ca_b=None):
 
     Parameters
     ----------
-    nu : float or array_like
-        Reduced volume, 0 < nu <= 1 [-].
-    lam : float or array_like
-        Confinement R0/R, 0 < lam < lam_c(nu) [-].
+    nu, lam : float or array_like
+        Reduced volume and confinement R0/R [-], as in :func:`~lubrication.geometry.clearance`
+        (lam >= lam_c(nu) raises :class:`~lubrication.checks.CannotPassError`).
     ca_b : float or array_like, optional
         Bending capillary number :math:`\eta U R_0^2/\kappa` > 0 [-]; only used to warn outside
         the phase diagram's 10 <= Ca_B <= 1e4 (the class itself does not depend on it).
@@ -144,11 +137,6 @@ def shape_class_chen2020(nu, lam, ca_b=None):
     -------
     shape : str or ndarray of str
         ``"parachute"`` or ``"bullet"``.
-
-    Raises
-    ------
-    CannotPassError
-        If lam >= lam_c(nu).
 
     Examples
     --------
@@ -176,23 +164,13 @@ def length_chen2020(nu, lam):
     spherocylinder at :math:`\lambda_c` (Barakat & Shaqfeh 2018a: :math:`\ell = \ell_c + O(\delta)`)
     and is exact for a sphere (nu = 1: :math:`\ell = 2\lambda`). More precise for less deflated
     vesicles; warned outside delta <= 0.1 or nu < 0.6 (:data:`LENGTH_RANGE_CHEN2020`).
-
-    Parameters
-    ----------
-    nu : float or array_like
-        Reduced volume, 0 < nu <= 1 [-].
-    lam : float or array_like
-        Confinement R0/R, 0 < lam < lam_c(nu) [-].
+    ``nu`` and ``lam`` as in :func:`~lubrication.geometry.clearance`: lam >= lam_c(nu) raises
+    :class:`~lubrication.checks.CannotPassError`.
 
     Returns
     -------
     ell : float or ndarray
         Length L/R [-].
-
-    Raises
-    ------
-    CannotPassError
-        If lam >= lam_c(nu).
 
     Examples
     --------

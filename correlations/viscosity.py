@@ -54,8 +54,6 @@ __all__ = [
     "OutOfRangeWarning",
 ]
 
-# Docstring sections repeat on purpose: each published fit documents its D, H_D (STYLE.md).
-
 VISCOSITY_LAWS = ("pries1992", "pries1994", "pries2005")
 
 #: Fåhræus-effect constants (a, b) [1/µm] of x = 1 + 1.7 exp(-a D) - 0.6 exp(-b D).
@@ -268,13 +266,9 @@ def shape_exponent_pries1992(diameter_um):
 
     C goes from 1 (small D) to -0.8 (large D) and crosses zero near D = 8.05 µm. It is evaluated
     in the algebraically equal form :math:`[1 - (0.8 + e^{-0.075D})q]/(1 + q)`,
-    :math:`q = 10^{-11}D^{12}`, which keeps full accuracy at small D. Same source as
-    :func:`eta_045_vitro_pries1992` (also used unchanged by the in vivo laws of 1994 and 2005).
-
-    Parameters
-    ----------
-    diameter_um : float or array_like
-        Tube diameter D [µm], > 0. Fitted on 3.3-1978 µm (warns outside).
+    :math:`q = 10^{-11}D^{12}`, which keeps full accuracy at small D. Same source, and the same
+    ``diameter_um`` and range, as :func:`eta_045_vitro_pries1992` (also used unchanged by the in
+    vivo laws of 1994 and 2005).
 
     Returns
     -------
@@ -427,22 +421,9 @@ def viscosity_vivo_pries2005(diameter_um, discharge_hematocrit):
     2W_eff < D everywhere (the largest ratio 2W_eff/D ~ 0.5 is near D_crit), so the D <= 2W_eff
     guard below never fires for valid hematocrits; it is kept as a check of the constants.
 
-    Parameters
-    ----------
-    diameter_um : float or array_like
-        Vessel diameter D [µm], > 0; warns outside 3.3-1978 µm.
-    discharge_hematocrit : float or array_like
-        Discharge hematocrit H_D, 0 <= H_D < 1 [-]. Broadcasts with D.
-
-    Returns
-    -------
-    eta_rel : float or ndarray
-        Relative apparent viscosity in vivo [-].
-
-    Raises
-    ------
-    InvalidParameterError
-        If D is not positive and finite, if D <= 2 W_eff(D, H_D), or H_D is outside [0, 1).
+    Arguments and result as in :func:`viscosity_vivo_pries1994`, except that every finite
+    D > 0 is accepted (there is no W); :class:`~lubrication.checks.InvalidParameterError` is
+    raised for D <= 2 W_eff(D, H_D) as well as for invalid inputs.
 
     Examples
     --------
@@ -510,30 +491,22 @@ def relative_viscosity(diameter_um, discharge_hematocrit, law="pries1992"):
     return _LAW_FUNCTIONS[law](diameter_um, discharge_hematocrit)
 
 
-def _checked_ratio(caller, diameter_um, discharge_hematocrit, constants):
-    """Inputs of a Fåhræus function checked (warning outside the fit's data range, named after
-    ``caller``); returns (H_D, H_T/H_D) as arrays."""
+def _check_fahraeus(caller, diameter_um, constants, hematocrit_name, hematocrit):
+    """Inputs of a Fåhræus function checked, as arrays (D, H); warns, naming ``caller`` (the
+    public function that calls this directly), outside the fit's data range."""
     check_choice("constants", constants, tuple(FAHRAEUS_CONSTANTS))
     d = _check_fahraeus_diameter(diameter_um, constants)
-    hd = check_fraction("discharge_hematocrit", discharge_hematocrit)
-    FAHRAEUS_RANGE.warn_outside(caller, stacklevel=4, diameter_um=d, discharge_hematocrit=hd)
-    return hd, _fahraeus_ratio(d, hd, constants)
+    h = check_fraction(hematocrit_name, hematocrit)
+    FAHRAEUS_RANGE.warn_outside(caller, stacklevel=4, diameter_um=d, **{hematocrit_name: h})
+    return d, h
 
 
 def hematocrit_ratio_fahraeus(diameter_um, discharge_hematocrit, constants="pries1990"):
     r"""Fåhræus ratio :math:`H_T/H_D = H_D + (1 - H_D)x` (see :func:`tube_hematocrit_fahraeus`).
 
     Computed directly rather than as a quotient of two hematocrits, so it stays exact for tiny
-    (even subnormal) hematocrits, and is 1 - (1 - x) at H_D = 0.
-
-    Parameters
-    ----------
-    diameter_um : float or array_like
-        Tube diameter D [µm], D > D*(constants) (:data:`FAHRAEUS_MIN_DIAMETER_UM`).
-    discharge_hematocrit : float or array_like
-        Discharge hematocrit H_D, 0 <= H_D < 1 [-].
-    constants : {"pries1990", "pries1992"}
-        Which fit to use.
+    (even subnormal) hematocrits, and is 1 - (1 - x) at H_D = 0. Arguments, errors and warnings
+    as in :func:`tube_hematocrit_fahraeus`.
 
     Returns
     -------
@@ -545,8 +518,9 @@ def hematocrit_ratio_fahraeus(diameter_um, discharge_hematocrit, constants="prie
     >>> round(hematocrit_ratio_fahraeus(10.0, 0.45, constants="pries1992"), 4)
     0.7296
     """
-    return scalar_or_array(_checked_ratio("hematocrit_ratio_fahraeus", diameter_um,
-                                          discharge_hematocrit, constants)[1])
+    d, hd = _check_fahraeus("hematocrit_ratio_fahraeus", diameter_um, constants,
+                            "discharge_hematocrit", discharge_hematocrit)
+    return scalar_or_array(_fahraeus_ratio(d, hd, constants))
 
 
 def tube_hematocrit_fahraeus(diameter_um, discharge_hematocrit, constants="pries1990"):
@@ -590,10 +564,10 @@ def tube_hematocrit_fahraeus(diameter_um, discharge_hematocrit, constants="pries
     >>> round(tube_hematocrit_fahraeus(10.0, 0.45, constants="pries1992"), 4)
     0.3283
     """
-    hd, ratio = _checked_ratio("tube_hematocrit_fahraeus", diameter_um, discharge_hematocrit,
-                               constants)
+    d, hd = _check_fahraeus("tube_hematocrit_fahraeus", diameter_um, constants,
+                            "discharge_hematocrit", discharge_hematocrit)
     # x <= 1 for D > D*, so H_T/H_D = H_D + (1 - H_D) x <= 1: H_T <= H_D to the last bit.
-    return scalar_or_array(hd * ratio)
+    return scalar_or_array(hd * _fahraeus_ratio(d, hd, constants))
 
 
 def discharge_hematocrit_fahraeus(diameter_um, tube_hematocrit, constants="pries1990"):
@@ -619,8 +593,8 @@ def discharge_hematocrit_fahraeus(diameter_um, tube_hematocrit, constants="pries
     Parameters
     ----------
     diameter_um : float or array_like
-        Tube diameter D [µm], D > D*(constants) (:data:`FAHRAEUS_MIN_DIAMETER_UM`); warns
-        outside 3.3-1978 µm.
+        Tube diameter D [µm], with the bound D > D*(constants), error and warning of
+        :func:`tube_hematocrit_fahraeus`.
     tube_hematocrit : float or array_like
         Tube hematocrit H_T, 0 <= H_T < 1 [-].
     constants : {"pries1990", "pries1992"}
@@ -631,21 +605,13 @@ def discharge_hematocrit_fahraeus(diameter_um, tube_hematocrit, constants="pries
     discharge_hematocrit : float or ndarray
         H_D [-], H_T <= H_D < 1.
 
-    Raises
-    ------
-    InvalidParameterError
-        For D <= D*(constants) (the message gives the bound), or invalid inputs.
-
     Examples
     --------
     >>> round(discharge_hematocrit_fahraeus(10.0, tube_hematocrit_fahraeus(10.0, 0.45)), 12)
     0.45
     """
-    check_choice("constants", constants, tuple(FAHRAEUS_CONSTANTS))
-    d = _check_fahraeus_diameter(diameter_um, constants)
-    ht = check_fraction("tube_hematocrit", tube_hematocrit)
-    FAHRAEUS_RANGE.warn_outside("discharge_hematocrit_fahraeus", diameter_um=d,
-                                tube_hematocrit=ht)
+    d, ht = _check_fahraeus("discharge_hematocrit_fahraeus", diameter_um, constants,
+                            "tube_hematocrit", tube_hematocrit)
     x = _fahraeus_x(d, constants)
     # x <= 1 here, so the discriminant x^2 + 4(1 - x)H_T >= x^2 and H_D >= H_T; at x = 1 (D -> inf
     # in floating point) this is exactly H_T. np.maximum guards H_D >= H_T against rounding.

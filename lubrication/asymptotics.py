@@ -52,8 +52,6 @@ __all__ = [
     "speed_slope_near_critical",
 ]
 
-# Docstring sections repeat on purpose: each published law documents its nu, lam (STYLE.md).
-
 # Chen et al. 2020 (after eq. small2): their BEM vesicles agree with eq. small1/small2 within 1 %
 # for lam < 0.5 ("particularly for nearly spherical vesicles"; nu = 0.6 deviates).
 SMALL_SPHERE_RANGE = ValidityRange.of("Chen et al. 2020 eq. small1/small2 (< 1 % error)",
@@ -216,12 +214,8 @@ def speed_slope_near_critical(nu):
     gives slope 1, and the appendix of Chen et al. (eq. vel2) also states
     :math:`V/U = 1 + \delta + O(\delta^2)`, while this slope exceeds 1 (≈ 1.07 at nu = 0.9,
     ≈ 1.02 at nu = 0.6). The formula is kept as published; the lubrication and BEM solvers
-    report their measured slope beside it.
-
-    Parameters
-    ----------
-    nu : float or array_like
-        Reduced volume, 0 < nu <= 1 [-].
+    report their measured slope beside it. ``nu`` as in
+    :func:`~lubrication.geometry.critical_confinement`.
 
     Returns
     -------
@@ -249,25 +243,15 @@ def speed_near_critical(nu, lam):
     Chen et al. 2020 eq. asmyp1, their transcription of Barakat & Shaqfeh 2018a. The slope is
     :func:`speed_slope_near_critical`; see its note on the open point (slope > 1, whereas a
     uniform film gives 1). Chen et al. find their BEM speeds slightly *below* this line near
-    :math:`\lambda_c`, most visibly at nu = 0.6.
-
-    Parameters
-    ----------
-    nu : float or array_like
-        Reduced volume, 0 < nu <= 1 [-].
-    lam : float or array_like
-        Confinement R0/R, 0 < lam < lam_c(nu) [-]. The law holds for delta <= 0.1
-        (:data:`NEAR_CRITICAL_RANGE`); an :class:`OutOfRangeWarning` is emitted for a wider gap.
+    :math:`\lambda_c`, most visibly at nu = 0.6. The law holds for delta <= 0.1
+    (:data:`NEAR_CRITICAL_RANGE`); an :class:`OutOfRangeWarning` is emitted for a wider gap.
+    ``nu`` and ``lam`` as in :func:`~lubrication.geometry.clearance`: lam >= lam_c(nu) raises
+    :class:`~lubrication.checks.CannotPassError`.
 
     Returns
     -------
     V_over_U : float or ndarray
         Vesicle velocity over the mean flow velocity [-].
-
-    Raises
-    ------
-    CannotPassError
-        If lam >= lam_c(nu).
 
     Examples
     --------
@@ -290,25 +274,13 @@ def dp_plus_near_critical(nu, lam):
     :math:`X = \ell_c/2`, the leading term is :math:`2\lambda\ell_0/\delta` with
     :math:`\ell_0 = \ell_c - 2` the cylindrical length in tube radii: the extra pressure drop of
     a rigid cylinder of that length in the film :math:`\delta`. At nu = 1 only the second term
-    is left, :math:`4\sqrt{2}\pi\lambda\delta^{-1/2}`: the rigid sphere near contact.
-
-    Parameters
-    ----------
-    nu : float or array_like
-        Reduced volume, 0 < nu <= 1 [-].
-    lam : float or array_like
-        Confinement R0/R, 0 < lam < lam_c(nu) [-]; the law holds for delta <= 0.1
-        (:data:`NEAR_CRITICAL_RANGE`).
+    is left, :math:`4\sqrt{2}\pi\lambda\delta^{-1/2}`: the rigid sphere near contact. Range
+    (:data:`NEAR_CRITICAL_RANGE`) and arguments as for :func:`speed_near_critical`.
 
     Returns
     -------
     dp_plus_R0 : float or ndarray
-        :math:`\Delta p^+R_0/(\eta U)` [-].
-
-    Raises
-    ------
-    CannotPassError
-        If lam >= lam_c(nu).
+        :math:`\Delta p^+R_0/(\eta U)` to the two terms above, error O(1) [-].
 
     Examples
     --------

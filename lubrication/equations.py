@@ -58,8 +58,6 @@ __all__ = [
     "BENDING_STATE",
 ]
 
-# Docstring sections repeat on purpose: G, e_m, e_w are separate formulas, each documents r, Q.
-
 # --------------------------------------------------------------------------- 1. local gap flow
 # Below the gap d = 1 - r = SERIES_GAP the exact forms are replaced by their Taylor series in d.
 # The exact forms subtract O(1) terms to leave an O(d^2) denominator, so they lose ~ eps/d^2 of
@@ -203,14 +201,8 @@ def membrane_shear_rate(r, Q):
 
     Chen et al. 2020 eq. shear (there multiplied by η). Positive when the fluid next to the
     membrane moves forward (+x). Diverges like :math:`1/(r\ln r)` at the poles. For
-    ``1 - r < SERIES_GAP`` the series :func:`membrane_shear_rate_series` is used.
-
-    Parameters
-    ----------
-    r : float or array_like
-        Membrane radius, 0 < r < 1 [R].
-    Q : float or array_like
-        Leak-back flux parameter 1 - U/V [-].
+    ``1 - r < SERIES_GAP`` the series :func:`membrane_shear_rate_series` is used. ``r`` and
+    ``Q`` as in :func:`pressure_gradient`.
 
     Returns
     -------
@@ -230,14 +222,8 @@ def wall_shear_rate(r, Q):
 
     .. math:: e_w = \frac{G}{4}\left[2 + \frac{1 - r^2}{\ln r}\right] + \frac{1}{\ln r}
 
-    Momentum balance of the gap fluid: :math:`e_w = r e_m + G(1 - r^2)/2`.
-
-    Parameters
-    ----------
-    r : float or array_like
-        Membrane radius, 0 < r < 1 [R].
-    Q : float or array_like
-        Leak-back flux parameter 1 - U/V [-].
+    Momentum balance of the gap fluid: :math:`e_w = r e_m + G(1 - r^2)/2`. ``r`` and ``Q`` as in
+    :func:`pressure_gradient`.
 
     Returns
     -------
@@ -285,7 +271,7 @@ def membrane_shear_rate_series(d, Q):
     d : float or array_like
         Gap 1 - r, 0 < d < 1 [R].
     Q : float or array_like
-        Leak-back flux parameter 1 - U/V [-].
+        Leak-back flux parameter, as in :func:`pressure_gradient` [-].
 
     Returns
     -------

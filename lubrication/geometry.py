@@ -39,9 +39,6 @@ __all__ = [
     "critical_length_um",
 ]
 
-# Docstring sections repeat on purpose: each formula documents its own nu, lam (STYLE.md).
-
-
 #: Smallest reduced volume accepted. Below it ell_c ~ nu^(-2) overflows double precision long
 #: before any physical relevance (red cells: nu ~ 0.6; strongly deflated vesicles: nu ~ 0.3).
 NU_MIN = 1e-6
@@ -51,8 +48,6 @@ def check_reduced_volume(nu) -> np.ndarray:
     """Check ``NU_MIN <= nu <= 1`` (a closed surface encloses at most a sphere's volume)."""
     return check_range("nu", nu, NU_MIN, 1.0,
                        reason="the reduced volume of a closed surface is at most 1 (sphere)")
-
-
 
 
 def critical_confinement(nu):
@@ -129,12 +124,8 @@ def critical_reduced_volume(lam):
 def critical_length(nu):
     r"""Critical reduced length :math:`\ell_c = 2L_c/d_c = 2\nu^{-2/3}\lambda_c^2` (Chen et al. 2020 eq. lc).
 
-    The length, in tube radii, of the spherocylinder that just fits the tube.
-
-    Parameters
-    ----------
-    nu : float or array_like
-        Reduced volume, 0 < nu <= 1 [-].
+    The length, in tube radii, of the spherocylinder that just fits the tube, for the reduced
+    volume ``nu`` of :func:`critical_confinement`.
 
     Returns
     -------
@@ -200,7 +191,8 @@ def clearance(nu, lam):
     nu : float or array_like
         Reduced volume, 0 < nu <= 1 [-].
     lam : float or array_like
-        Confinement R0/R, 0 < lam < lam_c(nu) [-].
+        Confinement R0/R, 0 < lam < lam_c(nu) [-]; :class:`~lubrication.checks.CannotPassError`
+        otherwise (:func:`check_passes`).
 
     Returns
     -------
