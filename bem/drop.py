@@ -63,7 +63,7 @@ shared cores):
   drops, as for the rigid sphere (:mod:`bem.solve`): λ >= max(0.01, (4e-16/(4.8 tol))^(1/5))
   (0.0095 at tol = 1e-5; λ = 0.02 and 0.05 at Ca = 0.1 converge in 9 s), below that the
   small clean-drop limit is quoted in the refusal. Near λ = 1 the drop touches the wall
-  (reported, ``success`` False).
+  (reported, status NO_STEADY_STATE).
 * ``max_time`` (wall time, :class:`lubrication.checks.Deadline`) is tested between BEM
   evaluations (Levenberg–Marquardt, relaxation steps) and levels; the time relaxation stops
   after ``max_steps`` = 5000 steps in any case.
@@ -80,6 +80,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from lubrication.checks import Deadline, InvalidParameterError, check_positive, check_range
+from lubrication.results import Outcome, Status, leading_status
 
 from .assembly import poiseuille
 from .geometry import graded_breaks, tube_panels, wall_half_length
@@ -305,10 +306,10 @@ class DropOperator:
 
 # -------------------------------------------------------------------------------- Newton
 @dataclass
-class NewtonReport:
-    """Outcome of :func:`newton_drop`."""
+class NewtonReport(Outcome):
+    """Outcome of :func:`newton_drop` (``status`` as in :class:`bem.newton.LMReport`)."""
 
-    success: bool
+    status: Status
     message: str
     state: DropState | None
     V: float
@@ -328,15 +329,15 @@ def newton_drop(op: DropOperator, modes0, V0: float | None = None, *, tol: float
     :math:`F_i = \sqrt{w_i}\,(u\cdot n - V n_x)_i` at the drop nodes, minimised by
     :func:`bem.newton.levenberg_marquardt` (difference Jacobian, one BEM evaluation per mode,
     then Broyden updates; the V column is exact). ``deadline``: wall-time budget
-    (:class:`lubrication.checks.Deadline`), an unsuccessful report when spent.
+    (:class:`lubrication.checks.Deadline`), a report of status TIME_LIMIT when spent.
     """
     modes = np.array(modes0, dtype=float)
     ev0 = op.evaluations
     try:
         state = op.state(op.curve(modes))
     except InvalidParameterError as exc:
-        return NewtonReport(False, f"initial shape rejected: {exc}", None, math.nan, modes, 0,
-                            op.evaluations - ev0, [])
+        return NewtonReport(Status.REJECTED_START, f"initial shape rejected: {exc}", None,
+                            math.nan, modes, 0, op.evaluations - ev0, [])
     modes = state.curve.modes.copy()
     V0 = state.V_fit if V0 is None else float(V0)
 
@@ -352,7 +353,7 @@ def newton_drop(op: DropOperator, modes0, V0: float | None = None, *, tol: float
                               exact_columns=v_column, deadline=deadline,
                               start=(np.sqrt(state.weights) * state.residual(V0), state))
     st = rep.payload
-    return NewtonReport(rep.success, rep.message, st, float(rep.z[-1]),
+    return NewtonReport(rep.status, rep.message, st, float(rep.z[-1]),
                         st.curve.modes.copy() if st is not None else modes, rep.iterations,
                         op.evaluations - ev0, rep.history, rep.jacobians)
 
@@ -390,10 +391,13 @@ def relax_drop(op: DropOperator, modes0, t_end: float, *, dt: float | None = Non
     Vel). Stops at ``t_end``, after ``max_steps``, or when the largest normal velocity in the
     drop frame falls below ``tol``, or (a failure) when ``deadline`` is spent.
 
-    Returns (modes, state, info) with info = {t, steps, max_un, history, length, failure};
-    history holds (t, max|u.n - V n_x|, V) per step, length the drop length x_front - x_rear,
-    failure a message (empty if none) when the interface became invalid (self-intersecting,
-    touching the wall) -- then modes and state are the last valid ones.
+    Returns (modes, state, info) with info = {t, steps, max_un, history, length, failure,
+    status}; history holds (t, max|u.n - V n_x|, V) per step, length the drop length
+    x_front - x_rear, failure a message (empty if none) when the interface became invalid
+    (self-intersecting, touching the wall) or the deadline was spent -- then modes and state
+    are the last valid ones; status is CONVERGED (stopped at ``tol``), NO_STEADY_STATE (the
+    interface became invalid), TIME_LIMIT or NOT_CONVERGED (``t_end`` or ``max_steps`` came
+    first).
     """
     modes = np.array(modes0, dtype=float)
     curve = op.curve(modes)
@@ -415,17 +419,18 @@ def relax_drop(op: DropOperator, modes0, t_end: float, *, dt: float | None = Non
     steps = 0
     history = []
     lengths = []
-    failure = ""
+    failure, status = "", Status.NOT_CONVERGED
     state = None
     while t < t_end - 1e-14 and steps < max_steps:
         if deadline is not None and deadline.expired():
-            failure = deadline.message()
+            failure, status = deadline.message(), Status.TIME_LIMIT
             break
         h = min(dt, t_end - t)
         try:
             k1, state, V, un = rate(modes)
         except InvalidParameterError as exc:
             failure = f"the interface became invalid at t = {t:.3g} R/U ({exc})"
+            status = Status.NO_STEADY_STATE
             break
         peak = float(np.max(np.abs(un)))
         if history and peak > 1.5 * history[-1][1] and dt > 1e-6:
@@ -434,12 +439,14 @@ def relax_drop(op: DropOperator, modes0, t_end: float, *, dt: float | None = Non
         xr, xf = state.curve.extent()
         lengths.append(xf - xr)
         if tol > 0 and peak < tol:
+            status = Status.CONVERGED
             break
         try:
             k2, *_ = rate(modes + h * k1)
             modes = op.curve(modes + 0.5 * h * (k1 + k2)).modes.copy()
         except InvalidParameterError as exc:
             failure = f"the interface became invalid at t = {t + h:.3g} R/U ({exc})"
+            status = Status.NO_STEADY_STATE
             break
         t += h
         steps += 1
@@ -450,7 +457,8 @@ def relax_drop(op: DropOperator, modes0, t_end: float, *, dt: float | None = Non
         xr, xf = state.curve.extent()
         lengths.append(xf - xr)
     return modes, state, {"t": t, "steps": steps, "max_un": history[-1][1] if history else
-                          math.inf, "history": history, "length": lengths, "failure": failure}
+                          math.inf, "history": history, "length": lengths, "failure": failure,
+                          "status": status}
 
 
 # -------------------------------------------------------------------------------- driver
@@ -544,9 +552,11 @@ def find_seed(lam: float, ca: float, *, initial: SpectralCurve | None = None,
 
     Newton from ``initial`` (default: the sphere); if it fails, the interface is relaxed in
     time for up to ``relax_time`` (R/U) and Newton restarted. Returns (curve, V, info); curve
-    is None when no steady shape was found, with info["message"] saying why (a drop that keeps
-    elongating is reported as such). ``deadline``: wall-time budget, tested between BEM
-    evaluations.
+    is None when no steady shape was found, with info["status"] and info["message"] saying why:
+    NO_STEADY_STATE for a drop that keeps elongating, whose interface became invalid in the
+    relaxation, or that did not settle in it (max|u·n − V n_x| > 0.01) and from whose relaxed
+    shape Newton failed too; TIME_LIMIT; else the status of the last Newton. ``deadline``:
+    wall-time budget, tested between BEM evaluations.
     """
     disc = DropDiscretisation(n_modes=SEED_MODES, n_panels=panels_for(SEED_MODES), order=order)
     start = SpectralCurve.sphere(lam, SEED_MODES) if initial is None else initial
@@ -561,6 +571,7 @@ def find_seed(lam: float, ca: float, *, initial: SpectralCurve | None = None,
         info["residual"] = rep.state.max_residual(rep.V)
         return rep.state.curve, rep.V, info
     if deadline is not None and deadline.expired():
+        info["status"] = Status.TIME_LIMIT
         info["message"] = f"no steady shape found: {deadline.message()}"
         return None, math.nan, info
     log.info("seed Newton failed at lam=%g ca=%g (%s); relaxing in time", lam, ca, rep.message)
@@ -571,11 +582,17 @@ def find_seed(lam: float, ca: float, *, initial: SpectralCurve | None = None,
     relax_evaluations = op.evaluations
     rate = _elongation(rinfo)
     lengths = rinfo["length"]
+    if rinfo["status"] is Status.TIME_LIMIT:
+        info["status"] = Status.TIME_LIMIT
+        info["message"] = (f"no steady shape found: {deadline.message()} (in a time relaxation "
+                           f"after Newton failed from the initial shape)")
+        return None, math.nan, info
     if rinfo["failure"] or (rinfo["max_un"] > 0.01 and rate > 0.02):
         what = (rinfo["failure"] if rinfo["failure"] else
                 f"after t = {rinfo['t']:.3g} R/U the drop keeps elongating")
         grow = (f" (length {lengths[0]:.3f} -> {lengths[-1]:.3f} R, growing at {rate:.3g} U at "
                 f"the end)" if len(lengths) > 1 else "")
+        info["status"] = Status.NO_STEADY_STATE
         info["message"] = (f"no steady shape: Newton failed from the initial shape and in a time "
                            f"relaxation {what}{grow}; breakup or a non-steady drop")
         return None, math.nan, info
@@ -587,6 +604,10 @@ def find_seed(lam: float, ca: float, *, initial: SpectralCurve | None = None,
         info["message"] = rep.message
         info["residual"] = rep.state.max_residual(rep.V)
         return rep.state.curve, rep.V, info
+    # a relaxation that did not settle, and Newton failing from its end: no steady state;
+    # a settled one: Newton's own failure
+    info["status"] = (rep.status if rinfo["status"] is Status.CONVERGED
+                      or rep.status is Status.TIME_LIMIT else Status.NO_STEADY_STATE)
     info["message"] = (f"no steady shape found: Newton failed from the initial shape and after "
                        f"a relaxation to t = {rinfo['t']:.3g} R/U (length {lengths[0]:.3f} -> "
                        f"{lengths[-1]:.3f} R, max|u.n - V n_x| = {rinfo['max_un']:.2e}; "
@@ -652,14 +673,16 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
         (:func:`bem.shape.equidistributing_density`); 0 keeps the arc length uniform.
     max_time : float, optional
         Wall-time budget [s] (:class:`lubrication.checks.Deadline`), tested between BEM
-        evaluations; when spent the result is returned with ``success`` False. Default: no
+        evaluations; when spent the result is returned with status TIME_LIMIT. Default: no
         limit.
 
     Returns
     -------
     DropResult
-        ``success`` False, with the reason in ``message``, when no steady shape was found, the
-        drop touched the wall, the accuracy targets were not met or ``max_time`` was spent.
+        ``status`` and the reason in ``message``: NO_STEADY_STATE when the drop keeps
+        elongating or touches the wall, NOT_CONVERGED when Newton or the steady residual fell
+        short, UNRESOLVED when the refinement pair disagrees, TIME_LIMIT when ``max_time`` was
+        spent, REJECTED_START when the first stage could not start.
 
     Raises
     ------
@@ -695,11 +718,12 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
         initial = initial.curve()
     t0 = time.perf_counter()
     seed, seed_V, info = find_seed(lam, ca, initial=initial, order=order, deadline=deadline)
-    iterations["seed"] = {k: v for k, v in info.items() if k != "message"}
+    iterations["seed"] = {k: v for k, v in info.items() if k not in ("message", "status")}
     if seed is None:
         timings["seed_s"] = timings["total_s"] = time.perf_counter() - t_start
-        return DropResult(lam=lam, ca=ca, success=False, message=info["message"], tol=tol,
-                          residual_tol=residual_tol, iterations=iterations, timings=timings)
+        return DropResult(lam=lam, ca=ca, status=info["status"], message=info["message"],
+                          tol=tol, residual_tol=residual_tol, iterations=iterations,
+                          timings=timings)
     density = equidistributing_density(seed, density_terms)
     if density_terms and info["residual"] > 1e-3:
         # the 16 uniform modes did not resolve the shape (a sharp rim): adapt the density to
@@ -717,22 +741,26 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
     # ---- refinement levels with the curvature-adapted density
     levels = []
     prev, V_prev = seed, seed_V
-    message = ""
+    status, message = Status.CONVERGED, ""
     for k, n in enumerate(sequence):
         if deadline.expired():
-            message = deadline.message()
+            status, message = Status.TIME_LIMIT, deadline.message()
             break
         disc = DropDiscretisation(n_modes=n, n_panels=panels_for(n), order=order)
         t0 = time.perf_counter()
         try:
             rep, op = _solve_stage(lam, ca, disc, prev, V_prev, density, deadline=deadline)
         except InvalidParameterError as exc:
+            # no iteration of this level could start: the solve's start if it is the first
+            status = Status.NOT_CONVERGED if levels else Status.REJECTED_START
             message = f"stage with {n} modes: {exc}"
             break
         timings[f"modes{n}_s"] = time.perf_counter() - t0
         iterations[f"modes{n}"] = {"iterations": rep.iterations, "evaluations": rep.evaluations,
                                    "jacobians": rep.jacobians}
         if not rep.success:
+            status = (Status.NOT_CONVERGED if levels and rep.status is Status.REJECTED_START
+                      else rep.status)
             message = f"Newton did not converge with {n} modes: {rep.message}"
             if rep.state is not None:
                 levels.append((rep, op, _outputs(lam, op, rep)))
@@ -751,7 +779,7 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
 
     timings["total_s"] = time.perf_counter() - t_start
     if not levels:
-        return DropResult(lam=lam, ca=ca, success=False, message=message, tol=tol,
+        return DropResult(lam=lam, ca=ca, status=status, message=message, tol=tol,
                           residual_tol=residual_tol, iterations=iterations, timings=timings)
     rep, op, fine = levels[-1]
     coarse = levels[-2][2] if len(levels) >= 2 else None
@@ -761,13 +789,15 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
         problems = []
         bad = [key for key in ("V_over_U", "dp_plus_R") if not err[key] <= tol * abs(fine[key])]
         if bad:
+            status = Status.UNRESOLVED
             problems.append(f"refinement pair differs by more than tol={tol:g} (relative) in "
                             + ", ".join(f"{key} ({err[key] / abs(fine[key]):.1e})" for key in bad))
         if not fine["residual"] <= residual_tol:
+            status = leading_status([status, Status.NOT_CONVERGED])
             problems.append(f"steady residual max|u.n - V n_x| = {fine['residual']:.2e} exceeds "
                             f"residual_tol={residual_tol:g}")
         message = "; ".join(problems)
-    success = not message
+    success = status is Status.CONVERGED
     if success:
         message = (f"converged: {levels[-1][2]['panels']['modes']} modes, pair differences "
                    + ", ".join(f"{key} {err[key]:.1e}" for key in ("V_over_U", "dp_plus_R"))
@@ -781,7 +811,7 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
     k_front, _ = curve.curvatures(np.array([1.0]))
     rmax = curve.max_radius()
     return DropResult(
-        lam=lam, ca=ca, success=success, message=message, V_over_U=fine["V_over_U"],
+        lam=lam, ca=ca, status=status, message=message, V_over_U=fine["V_over_U"],
         dp_plus_R=fine["dp_plus_R"], dp_plus_R0=fine["dp_plus_R0"], error_estimate=err,
         length=xf - xr, max_radius=rmax, film=1.0 - rmax, curvature_front=float(k_front[0]),
         curvature_rear=float(k_rear[0]), volume_error=fine["volume_error"],

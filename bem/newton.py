@@ -37,8 +37,8 @@ Jacobian, Kaufman 1975; Golub & Pereyra 2003): J^T F equals that of the full Jac
 z, and the columns differ by a term of order ``|F|``.
 
 Wall-time budget: both take an optional ``deadline`` (:class:`lubrication.checks.Deadline`),
-tested before every evaluation of F after the first; once it is spent they return an
-unsuccessful report whose message is the deadline's, carrying the evaluated point of smallest
+tested before every evaluation of F after the first; once it is spent they return a report of
+status TIME_LIMIT whose message is the deadline's, carrying the evaluated point of smallest
 ``|F|`` (never an exception). One evaluation is one BEM solve (well under a second at the
 resolutions the solvers allow), so the budget is kept to within about one evaluation, or one
 set of independent points handed to ``fun.many`` (a difference Jacobian: seconds at the
@@ -54,6 +54,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lubrication.checks import InvalidParameterError
+from lubrication.results import Outcome, Status
 
 __all__ = ["LMReport", "difference_jacobian", "levenberg_marquardt",
            "valley_levenberg_marquardt"]
@@ -132,16 +133,21 @@ def _within_budget(solver, fun, z0, deadline, start, **kwargs) -> "LMReport":
     except _Expired:
         log.info("Levenberg–Marquardt: %s", deadline.message())
         _, z, F, payload = best
-        return LMReport(False, deadline.message(), z, F, payload, 0, 0, 0, [best[0]])
+        return LMReport(Status.TIME_LIMIT, deadline.message(), z, F, payload, 0, 0, 0,
+                        [best[0]])
 
 log = logging.getLogger(__name__)
 
 
 @dataclass
-class LMReport:
-    """Outcome of :func:`levenberg_marquardt`; ``payload`` is what ``fun`` returned at ``z``."""
+class LMReport(Outcome):
+    """Outcome of :func:`levenberg_marquardt`; ``payload`` is what ``fun`` returned at ``z``.
 
-    success: bool
+    ``status``: CONVERGED (step or residual floor reached), NOT_CONVERGED (the iterations or
+    the Jacobian budget ended first), TIME_LIMIT (the deadline) or REJECTED_START (``fun``
+    rejected ``z0``); ``success`` is ``status is Status.CONVERGED``."""
+
+    status: Status
     message: str
     z: np.ndarray
     F: np.ndarray | None
@@ -229,7 +235,8 @@ def _initial_state(fun, z, start):
     try:
         F, payload = fun(z)
     except InvalidParameterError as exc:
-        return LMReport(False, f"initial shape rejected: {exc}", z, None, None, 0, 1, 0)
+        return LMReport(Status.REJECTED_START, f"initial shape rejected: {exc}", z, None, None,
+                        0, 1, 0)
     return z, F, payload, 1
 
 
@@ -359,7 +366,8 @@ def _levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd_step, 
             n_jac, fresh = n_jac + 1, True
     else:
         message = f"no convergence in {max_iter} iterations (last relative step {step:.1e})"
-    return LMReport(success, message, z, F, payload, it, n_eval, n_jac, history, J)
+    return LMReport(Status.CONVERGED if success else Status.NOT_CONVERGED, message, z, F,
+                    payload, it, n_eval, n_jac, history, J)
 
 
 def _directional_update(fun, z, F, J, Q, fd_step, payload=None):
@@ -564,4 +572,5 @@ def _valley_levenberg_marquardt(fun, z, F, payload, n_eval, *, tol, max_iter, fd
         n_eval += n
     else:
         message = f"no convergence in {max_iter} iterations (residual norm {norm:.2e})"
-    return LMReport(success, message, z, F, payload, it, n_eval, n_jac, history, J)
+    return LMReport(Status.CONVERGED if success else Status.NOT_CONVERGED, message, z, F,
+                    payload, it, n_eval, n_jac, history, J)

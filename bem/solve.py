@@ -47,6 +47,7 @@ import time
 import numpy as np
 
 from lubrication.checks import Deadline, InvalidParameterError, check_range
+from lubrication.results import Status
 
 from .assembly import assemble_influence, bordered_system
 from .geometry import sphere_in_tube, wall_half_length
@@ -266,12 +267,14 @@ def solve_sphere(lam: float, *, panels: int | None = None, tol: float = 1e-8,
         disturbance to 1e-13.
     max_time : float, optional
         Wall-time budget [s], checked between meshes (:class:`lubrication.checks.Deadline`);
-        when spent the result is returned unconverged. Default: no limit.
+        when spent the result is returned with status TIME_LIMIT. Default: no limit.
 
     Returns
     -------
     SphereResult
-        V/U, Δp⁺R/(ηU), Δp⁺a/(ηU), the quiescent-tube drag K and diagnostics.
+        V/U, Δp⁺R/(ηU), Δp⁺a/(ηU), the quiescent-tube drag K and diagnostics; ``status``
+        UNRESOLVED when the refinement pair differs by more than ``tol`` at the last mesh,
+        TIME_LIMIT when ``max_time`` stopped the refinement.
 
     Raises
     ------
@@ -289,7 +292,7 @@ def solve_sphere(lam: float, *, panels: int | None = None, tol: float = 1e-8,
         lam, panels=panels, tol=tol, order=order, half_length=half_length,
         max_panels=max_panels, max_time=max_time)
     deadline = Deadline(max_time)
-    stop = ""
+    stop, timed_out = "", False
 
     def mesh(n):
         return solve_sphere_mesh(lam, n, order=order, half_length=half_length, near=near,
@@ -313,7 +316,7 @@ def solve_sphere(lam: float, *, panels: int | None = None, tol: float = 1e-8,
                             f"({history[-1]['panels']['body']} sphere panels)")
                     break
             if deadline.expired():
-                stop = deadline.message()
+                stop, timed_out = deadline.message(), True
                 break
             fine = mesh(n)
             history.append(fine)
@@ -327,6 +330,10 @@ def solve_sphere(lam: float, *, panels: int | None = None, tol: float = 1e-8,
             fine, coarse = history[-1], history[-2]
     err = _estimates(fine, coarse) if fine is not coarse else {k: math.nan for k in _OUTPUTS}
     converged = fine is not coarse and all(err[k] <= tol * abs(fine[k]) for k in _OUTPUTS)
+    # the refinement ends with the pair within tol, at a resource cap (the error estimate is
+    # then above tol) or at the deadline
+    status = (Status.CONVERGED if converged else Status.TIME_LIMIT if timed_out
+              else Status.UNRESOLVED)
     if converged:
         message = "converged"
     else:
@@ -349,7 +356,7 @@ def solve_sphere(lam: float, *, panels: int | None = None, tol: float = 1e-8,
         dp_plus_R0=fine["dp_plus_R0"], drag_K=fine["drag_K"],
         dp_translating_R=fine["dp_translating_R"],
         V_over_U_err=err["V_over_U"], dp_plus_R_err=err["dp_plus_R"],
-        drag_K_err=err["drag_K"], converged=converged, tol=tol,
+        drag_K_err=err["drag_K"], status=status, tol=tol,
         panels=fine["panels"], panels_coarse=coarse["panels"],
         half_length=fine["half_length"], residual=fine["residual"],
         null_multiplier=fine["null_multiplier"], timings=timings, message=message)

@@ -48,6 +48,7 @@ import numpy as np
 
 from lubrication.checks import Deadline, InvalidParameterError, as_finite
 from lubrication.io import atomic_write, clean_json, write_json
+from lubrication.results import Status
 
 __all__ = ["MAX_POINTS", "SWEEP_COLUMNS", "save_sweep", "sweep_table", "sweep_vesicle"]
 
@@ -139,13 +140,13 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
     max_time : float, optional
         Wall-time budget of the whole sweep [s] (:class:`lubrication.checks.Deadline`): each
         point gets what is left; once spent, the remaining points are returned unsolved
-        (``success`` False with the deadline's message). Default: no limit.
+        (status TIME_LIMIT with the deadline's message). Default: no limit.
 
     Returns
     -------
     list of VesicleResult
-        In the order of ``lams`` (or ``lam_ratios``). A failed point is kept with ``success``
-        False and the solver's message; ``timings["total_s"]`` is its wall-clock time.
+        In the order of ``lams`` (or ``lam_ratios``). A failed point is kept with the solver's
+        status and message; ``timings["total_s"]`` is its wall-clock time.
 
     Raises
     ------
@@ -184,7 +185,8 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
         clock = time.perf_counter()
         if deadline.expired():
             res = VesicleResult(nu=nu, lam=float(lam[k]), lam_c=lam_c, ca_b=ca_b,
-                                success=False, message=f"not solved: {deadline.message()}")
+                                status=Status.TIME_LIMIT,
+                                message=f"not solved: {deadline.message()}")
         else:
             left = None if max_time is None else max_time - (time.monotonic() - started)
             res = vesicle.solve_vesicle(nu, float(lam[k]), ca_b=ca_b, initial=previous,

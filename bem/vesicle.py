@@ -339,7 +339,7 @@ Resource envelope (checked before any BEM work by :func:`check_vesicle_inputs`):
   (bending load ~1e-308) used to run to a failed solve.
 * ``max_time`` (:class:`lubrication.checks.Deadline`) is tested between BEM evaluations of
   Levenberg–Marquardt, between levels and between continuation rungs; when spent the result
-  has ``success`` False and the deadline's message. Each level does at most ``max_iter``
+  has status TIME_LIMIT and the deadline's message. Each level does at most ``max_iter``
   (40; valley: 320) iterations and 4–8 difference Jacobians.
 """
 
@@ -359,6 +359,7 @@ from scipy.interpolate import CubicSpline
 
 from lubrication.checks import Deadline, InvalidParameterError, check_positive, check_range
 from lubrication.geometry import critical_length, resolve_confinement
+from lubrication.results import Status, leading_status
 
 from .assembly import poiseuille
 from .drop import DropDiscretisation, DropOperator, panels_for
@@ -1366,14 +1367,17 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         solve stops far from the minimum (at (0.6, 1.94): γ_max 799 instead of 932).
     max_time : float, optional
         Wall-time budget [s] (:class:`lubrication.checks.Deadline`), tested between BEM
-        evaluations, levels and continuation rungs; when spent the result has ``success``
-        False. Default: no limit. Mode counts are at most MAX_MODES = 96.
+        evaluations, levels and continuation rungs; when spent the result has status
+        TIME_LIMIT. Default: no limit. Mode counts are at most MAX_MODES = 96.
 
     Returns
     -------
     VesicleResult
-        ``success`` False with the reason in ``message`` when the solver did not converge, the
-        shape self-intersects or touches the wall, or the refinement pair disagrees.
+        ``status`` and the reason in ``message``: NO_STEADY_STATE when the membrane
+        self-intersects or the film closes, TIME_LIMIT, NOT_CONVERGED when Levenberg–Marquardt
+        or the steady residual fell short, UNRESOLVED when the estimated discretisation error
+        is above the tolerance (of several, the first in this order), REJECTED_START when no
+        level could start from its seed.
 
     Raises
     ------
@@ -1438,8 +1442,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     rung_log = {}
 
     def timed_out(what: str):
-        return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=False, tol=tol,
-                             residual_tol=residual_tol, iterations=dict(rung_log),
+        return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=Status.TIME_LIMIT,
+                             tol=tol, residual_tol=residual_tol, iterations=dict(rung_log),
                              timings={"total_s": time.perf_counter() - t_start},
                              message=f"{deadline.message()} ({what})")
     if continuation:
@@ -1458,10 +1462,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             rung_log[f"rung{q:g}"] = {
                 "evaluations": sum(v["evaluations"] for v in rung.iterations.values()),
                 "seconds": rung.timings.get("total_s", math.nan), "residual": rung.residual}
-            if rung.modes.size == 0 or "film closes" in rung.message \
-                    or "self-intersects" in rung.message:
+            if rung.modes.size == 0 or rung.status is Status.NO_STEADY_STATE:
                 return VesicleResult(
-                    nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=False, tol=tol,
+                    nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=rung.status, tol=tol,
                     residual_tol=residual_tol, timings={"total_s": time.perf_counter() - t_start},
                     message=f"continuation failed at lam/lam_c = {q:g}: {rung.message}")
             log.info("solve_vesicle continuation rung lam/lam_c=%g: V/U=%.6f dp+R0=%.5g "
@@ -1501,11 +1504,12 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         seed = fit_curve(seed.sample, 0.0, 1.0, sequence[0],
                          density=_DENSITIES[density](seed, density_terms))
     levels, timings, iterations = [], {}, dict(rung_log)
-    message = ""
+    status, message = Status.CONVERGED, ""        # the ladder's own failure, if any
     prev = seed
     consistent = 0           # index of the first level on the density of the last one
     for i, n in enumerate(sequence):
         if deadline.expired():
+            status = Status.TIME_LIMIT
             message = f"{deadline.message()} (before the level with {n} modes)"
             break
         disc = vesicle_discretisation(n, order)
@@ -1545,6 +1549,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
             except InvalidParameterError as exc:
                 rejected = exc
         if st is None:
+            # no seed of this level could start: the solve's start if it is the first level
+            status = Status.NOT_CONVERGED if levels else Status.REJECTED_START
             message = f"level with {n} modes: {rejected}"
             break
         timings[f"modes{n}_s"] = time.perf_counter() - t0
@@ -1556,9 +1562,11 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                  out["tension_max"], out["residual"], info["message"])
         if not info["success"]:
             if deadline.expired():
+                status = Status.TIME_LIMIT
                 message = f"{deadline.message()} (in the level with {n} modes)"
                 break
             if n == sequence[-1]:
+                status = Status.NOT_CONVERGED
                 message = f"Levenberg–Marquardt failed with {n} modes: {info['message']}"
                 break
             # a coarser level only seeds the next one, which is judged on its own (residual,
@@ -1584,27 +1592,33 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                 max_iter=max_iter, density=density_given, density_terms=density_terms,
                 rung_modes=rung_modes, valley=valley_given, max_time=left)
     if not levels:
-        return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=False,
+        return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=status,
                              message=message, tol=tol, residual_tol=residual_tol,
                              iterations=iterations, timings=timings)
     st, op, fine = levels[-1]
     err = _error_estimate([lv[2] for lv in levels[consistent:]])
     curve = st["curve"]
     prof = _profile(curve, st["g"])
-    problems = [message] if message else []
+    # every problem is named; the status is the leading one (lubrication.results.PRECEDENCE)
+    problems, found = ([message], [status]) if message else ([], [])
     if _self_intersects(prof["x"], prof["r"]):
         problems.append("the membrane self-intersects")
+        found.append(Status.NO_STEADY_STATE)
     if fine["film_min"] < 1e-3:
         problems.append(f"the film closes (min gap {fine['film_min']:.2e} R)")
+        found.append(Status.NO_STEADY_STATE)
     bad = [k for k in _KEYS if not err[k] <= _tolerance(k, tol, tension_tol) * abs(fine[k])]
     if bad:
         problems.append("estimated discretisation error above the tolerance in "
                         + ", ".join(f"{k} ({err[k] / abs(fine[k]):.1e} > "
                                     f"{_tolerance(k, tol, tension_tol):g})" for k in bad))
+        found.append(Status.UNRESOLVED)
     if not fine["residual"] <= residual_tol:
         problems.append(f"steady residual max|u - V e_x| = {fine['residual']:.2e} exceeds "
                         f"residual_tol={residual_tol:g}")
-    success = not problems
+        found.append(Status.NOT_CONVERGED)
+    status = leading_status(found)
+    success = status is Status.CONVERGED
     message = ("; ".join(problems) if problems else
                f"converged: {fine['panels']['modes']} modes, estimated errors "
                + ", ".join(f"{k} {err[k]:.1e}" for k in _KEYS)
@@ -1622,7 +1636,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     history = [(lv[2]["panels"]["modes"], lv[2]["residual"], lv[2]["V_over_U"],
                 lv[2]["dp_plus_R0"], lv[2]["tension_max"]) for lv in levels]
     return VesicleResult(
-        nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, success=success, message=message,
+        nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=status, message=message,
         V_over_U=fine["V_over_U"], dp_plus_R0=fine["dp_plus_R0"], dp_plus_R=fine["dp_plus_R"],
         ell=fine["ell"], ell_poles=fine["ell_poles"], film_min=fine["film_min"],
         tension_max=fine["tension_max"],

@@ -61,7 +61,7 @@ from lubrication.geometry import critical_confinement
 
 from .estimate import PHYSICAL_BOUNDS, physical_scales
 
-__all__ = ["Status", "InferredValue", "Fit", "Inference", "infer_map", "infer_cell",
+__all__ = ["Verdict", "InferredValue", "Fit", "Inference", "infer_map", "infer_cell",
            "mean_velocity_from_gradient",
            "DEFAULT_CA_B", "DEFAULT_RELATIVE_ERROR", "CHI_MAX"]
 
@@ -110,8 +110,8 @@ UNITS = {"nu": "-", "lam": "-", "lam_ratio": "-", "delta": "-", "lam_c": "-", "c
          "tension_front_mN_m": "mN/m"}
 
 
-class Status(enum.Enum):
-    """Outcome of an inference."""
+class Verdict(enum.Enum):
+    """Outcome of an inference: whether a cell of the map is consistent with the measurements."""
     CONSISTENT = "consistent"
     INCONSISTENT = "inconsistent"
 
@@ -155,7 +155,7 @@ class Inference:
     fit (None when no fit lies inside the map), ``alternatives`` the other distinct acceptable
     fits, ``quantities`` the :class:`InferredValue` of every output, ``inputs`` the targets and
     their uncertainties, ``method`` how the uncertainty was propagated, ``assumptions``."""
-    status: Status
+    status: Verdict
     message: str
     fit: Fit | None
     alternatives: tuple
@@ -167,7 +167,7 @@ class Inference:
 
     @property
     def consistent(self) -> bool:
-        return self.status is Status.CONSISTENT
+        return self.status is Verdict.CONSISTENT
 
     def to_dict(self) -> dict:
         return {"status": self.status.value, "message": self.message,
@@ -467,7 +467,7 @@ def _run(m, measured: dict, errors: dict, derive, samples: int, seed: int,
                f"the best fit nu={best.nu:.4g}, lam/lam_c={best.lam_ratio:.4g} misses V/U="
                f"{target[0]:.4g} and ell={target[1]:.4g} by chi={best.chi:.3g} combined "
                f"standard deviations (> {CHI_MAX:g})")
-        return Inference(Status.INCONSISTENT, msg, best, (), {}, inputs, "none",
+        return Inference(Verdict.INCONSISTENT, msg, best, (), {}, inputs, "none",
                          tuple(assumptions))
     best = good[0]
     centre = _outputs(m, best.nu, best.lam_ratio, ca_of, d, scales)
@@ -599,7 +599,7 @@ def _run(m, measured: dict, errors: dict, derive, samples: int, seed: int,
            f"to chi={best.chi:.2g} combined standard deviations"
            + (f" ({len(good)} distinct vesicles match: ambiguous)" if len(good) > 1 else ""))
     log.info(msg)
-    return Inference(Status.CONSISTENT, msg, best, tuple(good[1:]), quantities, inputs,
+    return Inference(Verdict.CONSISTENT, msg, best, tuple(good[1:]), quantities, inputs,
                      method, tuple(assumptions), tuple(notes))
 
 

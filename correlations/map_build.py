@@ -55,6 +55,7 @@ from pathlib import Path
 from lubrication.checks import InvalidParameterError, check_range
 from lubrication.io import provenance as run_provenance
 from lubrication.io import write_json
+from lubrication.results import Status, leading_status
 
 from .solution_map import POINT_FORMAT, QUANTITIES, pack_map, point_filename, read_points
 
@@ -157,7 +158,9 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     """One BEM point. ``warm``: the previous converged point of the line (a dict with ``nu``,
     ``lam_ratio`` and ``shape``: a stored record or what this function returned), or None.
     The starts are tried in the order of the module docstring, within ``max_time`` in all.
-    Returns (record fields, the warm start of the next point or None)."""
+    The point's status is CONVERGED if a start converged, else the leading status of the failed
+    starts (:func:`lubrication.results.leading_status`). Returns (record fields, the warm start
+    of the next point or None)."""
     from bem.shape import SpectralCurve
     from bem.vesicle import NEAR_CRITICAL, solve_vesicle
     from lubrication.geometry import critical_confinement
@@ -172,11 +175,12 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
         label = f"neighbour (nu={warm['nu']:g}, lam/lam_c={warm['lam_ratio']:g})"
         starts.insert(0 if lam_ratio <= NEAR_CRITICAL else 1, (label, neighbour))
     deadline = None if max_time is None else time.monotonic() + max_time
-    failures, bie, res = [], 0, None
+    failures, found, bie, res = [], [], 0, None
     for label, make_initial in starts:
         left = None if deadline is None else deadline - time.monotonic()
         if left is not None and left <= 0:
             failures.append(f"{label}: not tried, max_time spent")
+            found.append(Status.TIME_LIMIT)
             break
         initial = None
         try:
@@ -189,19 +193,22 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
             # the neighbour's shape or density does not carry over to this point (e.g. its
             # density turns negative on the new curve): the next start
             failures.append(f"{label}: cannot start ({exc})")
+            found.append(Status.REJECTED_START)
             continue
         seed = res.seed if initial is None else label
         bie += res.bie_solves
         if res.success:
             break
         failures.append(f"{label}: {res.message}")
-    if res is None:                  # no start could run: a failed point (stored by _point)
-        raise RuntimeError("; ".join(failures))
+        found.append(res.status)
+    if res is None:                  # no start could run: a failed point
+        return _failed_fields(leading_status(found), "; ".join(failures)), None
+    status = Status.CONVERGED if res.success else leading_status(found)
     message = res.message if res.success else "; ".join(failures)
     d = res.to_dict(shape=False)
     est = res.error_estimate if res.success else {}
     fields = {"lam": d["lam"], "lam_c": d["lam_c"], "success": bool(res.success),
-              "message": message, **{q: d.get(q) for q in QUANTITIES},
+              "status": status.value, "message": message, **{q: d.get(q) for q in QUANTITIES},
               "shape_class": d["shape_class"], "failed_starts": failures if res.success else [],
               "error_estimate": {q: (None if est.get(q) is None or not math.isfinite(est[q])
                                      else float(est[q])) for q in QUANTITIES},
@@ -226,11 +233,11 @@ def _solve_lubrication(nu, lam_ratio, ca_b, warm, options, max_time):
     try:
         res = solve_lubrication(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial,
                                 max_time=max_time, **options)
-    except InvalidParameterError as exc:      # outside the model's domain: a failed point
-        return {"success": False, "message": f"outside the lubrication model: {exc}",
-                **dict.fromkeys(QUANTITIES), "shape_class": None,
-                "error_estimate": dict.fromkeys(QUANTITIES), "residual": None,
-                "bie_solves": None, "seed": "", "shape": None,
+    except InvalidParameterError as exc:
+        # outside the model's domain (its range, checked before any work): the model has no
+        # solution there
+        return {**_failed_fields(Status.NO_STEADY_STATE, f"outside the lubrication model: {exc}"),
+                "residual": None, "bie_solves": None, "seed": "",
                 "solver": {"name": "lubrication.solve.solve_lubrication", "options": options,
                            "max_time": max_time}}, None
     d = res.to_dict()
@@ -239,8 +246,9 @@ def _solve_lubrication(nu, lam_ratio, ca_b, warm, options, max_time):
         # under the vesicle from the model; Poiseuille flow (tau_w R/(eta U) = 4) elsewhere
         wall = max(4.0, float(max(abs(float(v)) for v in res.shear_wall)))
     fields = {"lam": d["lam"], "lam_c": d["lam_c"], "success": bool(res.success),
-              "message": res.message, **{q: d.get(q) for q in QUANTITIES},
-              "wall_shear_max": wall, "shape_class": d["shape_class"],
+              "status": res.status.value, "message": res.message,
+              **{q: d.get(q) for q in QUANTITIES}, "wall_shear_max": wall,
+              "shape_class": d["shape_class"],
               "error_estimate": dict.fromkeys(QUANTITIES), "residual": d["max_residual"],
               "bie_solves": None, "seed": "previous point" if initial is not None else "cold",
               "shape": None,
@@ -254,16 +262,25 @@ def _solve_lubrication(nu, lam_ratio, ca_b, warm, options, max_time):
 SOLVERS = {"bem": _solve_bem, "lubrication": _solve_lubrication}
 
 
+def _failed_fields(status: Status, message: str) -> dict:
+    """Record fields of a point without a solution: its status, the reason, no numbers."""
+    return {"success": False, "status": status.value, "message": message,
+            **dict.fromkeys(QUANTITIES), "shape_class": None,
+            "error_estimate": dict.fromkeys(QUANTITIES), "shape": None}
+
+
 def _point(method, nu, lam_ratio, ca_b, warm, options, max_time, provenance):
     """Solve one point and return (its record, the next warm start). A solver exception is a
-    failed point with the exception as reason (it is stored, not raised)."""
+    failed point with the exception as reason (it is stored, not raised): status
+    REJECTED_START for an InvalidParameterError (the solver's own start refused, e.g. a seed
+    density that is not positive), NOT_CONVERGED for any other."""
     clock = time.perf_counter()
     try:
         fields, warm_next = SOLVERS[method](nu, lam_ratio, ca_b, warm, options, max_time)
     except Exception as exc:        # noqa: BLE001 - stored as the failure reason
-        fields, warm_next = {"success": False, "message": f"{type(exc).__name__}: {exc}",
-                             **dict.fromkeys(QUANTITIES), "shape_class": None,
-                             "error_estimate": dict.fromkeys(QUANTITIES), "shape": None}, None
+        status = (Status.REJECTED_START if isinstance(exc, InvalidParameterError)
+                  else Status.NOT_CONVERGED)
+        fields, warm_next = _failed_fields(status, f"{type(exc).__name__}: {exc}"), None
     seconds = time.perf_counter() - clock
     solver = fields.pop("solver", {})
     record = {"format": POINT_FORMAT, "method": method, "nu": nu, "lam_ratio": lam_ratio,

@@ -9,9 +9,10 @@ Three layers, in the order of the data's life:
 
 1. **Points** (written by :mod:`correlations.map_build`): one JSON file per finished grid point
    of a build folder, named by :func:`point_filename`, with the inputs, the method, ``success``,
-   the reason of a failure, the quantities of :data:`QUANTITIES`, the solver's own error
-   estimates, diagnostics, the BEM shape (for warm starts) and provenance. A failed point is
-   stored as failed, never filled in.
+   ``status`` (a :class:`lubrication.results.Status` value), the reason of a failure, the
+   quantities of :data:`QUANTITIES`, the solver's own error estimates, diagnostics, the BEM
+   shape (for warm starts) and provenance. A failed point is stored as failed, never filled
+   in.
 2. **Pack** (:func:`pack_map`): the converged points of a build folder as one compact JSON file
    (format :data:`FORMAT`): the grid, provenance, column units, one list per column (no shapes),
    the holes (failed or missing points with their reasons) and the leave-one-out interpolation
@@ -116,6 +117,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from lubrication.checks import CannotPassError, InvalidParameterError, as_finite, check_positive
+from lubrication.results import status_of
 
 __all__ = ["FORMAT", "POINT_FORMAT", "QUANTITIES", "TRANSFORMS", "DEFAULT_MAP", "CA_B_CLAMP_MAX",
            "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
@@ -201,7 +203,11 @@ def _bad_file(path, reason: str) -> InvalidParameterError:
 
 def read_point(path) -> dict:
     """One stored point (a dict), checked to be a point file; raises
-    :class:`~lubrication.checks.InvalidParameterError` (name ``map``) otherwise."""
+    :class:`~lubrication.checks.InvalidParameterError` (name ``map``) otherwise. Its
+    ``"status"`` is a :class:`lubrication.results.Status` value: the stored one, or for a point
+    file without one, the status :func:`lubrication.results.status_of` derives from
+    ``success`` and ``message``."""
+
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -211,6 +217,10 @@ def read_point(path) -> dict:
     for key in ("method", "nu", "lam_ratio", "ca_b", "success"):
         if key not in data:
             raise _bad_file(path, f"point file without {key!r}")
+    try:
+        data["status"] = status_of(data).value
+    except ValueError:
+        raise _bad_file(path, f"unknown status {data['status']!r}") from None
     return data
 
 

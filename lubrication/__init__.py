@@ -11,9 +11,10 @@ from .geometry import (
     critical_confinement, critical_diameter_um, critical_length, critical_length_um,
     critical_reduced_volume, reduced_area_excess, reduced_volume, volume_radius,
 )
+from .results import Status
 
 __all__ = [
-    "CannotPassError", "InvalidParameterError", "OutOfRangeWarning", "ValidityRange",
+    "CannotPassError", "InvalidParameterError", "OutOfRangeWarning", "Status", "ValidityRange",
     "area_radius", "cell_from_volume_area", "check_passes", "clearance", "confinement_from_diameter",
     "critical_confinement", "critical_diameter_um", "critical_length", "critical_length_um",
     "critical_reduced_volume", "reduced_area_excess", "reduced_volume", "volume_radius",

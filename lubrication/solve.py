@@ -28,7 +28,8 @@ The method, in the order of this module:
 6. **Acceptance.** Never the solver's status flag alone: largest collocation residual, area and
    volume recomputed by quadrature of the solution (relative error ≤ ``CONSTRAINT_TOL``), net
    axial force on the vesicle (≤ ``FORCE_TOL`` of its pressure force), positive tension on the
-   physical branch. A failure is returned as ``success=False`` with the reason.
+   physical branch. A failure is returned as a result with its :class:`~lubrication.results.Status`
+   (``success`` False) and the reason.
 7. **Result** in project units (:class:`lubrication.results.LubricationResult`):
    :math:`V/U = 1/(1 - Q)`, :math:`\Delta p^+ R/(\eta U) = [\Delta p^+R/(\eta V)]/(1 - Q)`,
    :math:`\Delta p^+R_0/(\eta U) = [\Delta p^+R/(\eta V)]\,\lambda/(1 - Q)` with
@@ -60,7 +61,7 @@ nu = 0.9), below which that model has no solution; up to 1 (exclusive: critical 
   13 s), up to ~2 min for the bending model near the end of its branch; a warm-started sweep
   point 0.2-1 s. ``max_time`` (seconds, :class:`~lubrication.checks.Deadline`) bounds any
   solve: it is tested at every right-hand-side evaluation of solve_bvp and between attempts
-  and continuation steps, and a spent budget returns ``success=False`` with the reason.
+  and continuation steps, and a spent budget returns status TIME_LIMIT with the reason.
 * Sweeps: at most ``MAX_SWEEP_POINTS`` = 2000 points.
 """
 
@@ -79,7 +80,7 @@ from .equations import (BENDING_STATE, HIGH_CA_STATE, gap_flow, capillary_number
                         rhs_high_ca, spherical_cap)
 from .geometry import critical_confinement, critical_length
 from .io import provenance
-from .results import LubricationResult
+from .results import LubricationResult, Status
 
 __all__ = ["solve_lubrication", "sweep_lubrication", "check_inputs", "lowest_lam_ratio",
            "high_ca_branch_end", "CAP_RADIUS", "CONSTRAINT_TOL", "FORCE_TOL", "NU_RANGE",
@@ -529,7 +530,8 @@ def _diagnose(prob, model, sol, y):
 
 
 def _verdict(prob, model, diag):
-    """(success, message) from the diagnostics; the status flag of solve_bvp is only reported."""
+    """(Status, message) from the diagnostics: CONVERGED, or NOT_CONVERGED with every failed
+    check; the status flag of solve_bvp is only reported."""
     # A mesh that ran out of nodes may still hold a converged solution: accept residuals up to
     # 10 tol then, provided the constraints and force balance also pass.
     res_limit = prob.tol if diag["bvp_status"] == 0 else 10.0 * prob.tol
@@ -549,10 +551,11 @@ def _verdict(prob, model, diag):
     if model == "bending" and not diag["front_tension"] > 0.0:
         problems.append(f"front tension {diag['front_tension']:.3g} <= 0: unphysical branch")
     if problems:
-        return False, "not converged: " + "; ".join(problems)
-    return True, (f"converged: residual {diag['max_residual']:.1e}, {diag['n_nodes']} nodes, "
-                  f"area/volume errors {diag['area_error']:.1e}/{diag['volume_error']:.1e}, "
-                  f"force balance {diag['force_balance_residual']:.1e}")
+        return Status.NOT_CONVERGED, "not converged: " + "; ".join(problems)
+    return Status.CONVERGED, (f"converged: residual {diag['max_residual']:.1e}, "
+                              f"{diag['n_nodes']} nodes, area/volume errors "
+                              f"{diag['area_error']:.1e}/{diag['volume_error']:.1e}, "
+                              f"force balance {diag['force_balance_residual']:.1e}")
 
 
 # --------------------------------------------------------------------------- 7. result
@@ -565,11 +568,12 @@ def _cap_extent(k, eps):
     return theta / k, (1.0 - math.cos(theta)) / k
 
 
-def _failed(prob, message, diag, timings, state=None):
+def _failed(prob, status, message, diag, timings, state=None):
+    """LubricationResult of a failed solve: ``status``, the reason, no physical numbers."""
     keep = {k: diag[k] for k in ("force_balance_residual", "area_error", "volume_error",
                                  "n_nodes", "max_residual") if k in diag}
     return LubricationResult(nu=prob.nu, lam=prob.lam, lam_c=prob.lam_c, ca_b=prob.ca_b,
-                             model=prob.model, success=False, message=message, tol=prob.tol,
+                             model=prob.model, status=status, message=message, tol=prob.tol,
                              timings=timings, provenance=provenance(), solver_state=state, **keep)
 
 
@@ -607,7 +611,7 @@ def _result(prob, model, sol, y, diag, message, timings):
     tension = to_u * np.concatenate((sigma_v[:1], sigma_v, sigma_v[-1:]))
     return LubricationResult(
         nu=prob.nu, lam=prob.lam, lam_c=prob.lam_c, ca_b=prob.ca_b, model=model,
-        success=True, message=message,
+        status=Status.CONVERGED, message=message,
         V_over_U=to_u, Q=Q, dp_plus_R0=dp_plus_v * prob.lam * to_u, dp_plus_R=dp_plus_v * to_u,
         ell=length, film_min=float(np.min(1.0 - r)),
         tension_front=float(tension[-1]), tension_rear=float(tension[0]),
@@ -632,21 +636,22 @@ def _result(prob, model, sol, y, diag, message, timings):
 
 # --------------------------------------------------------------------------- 8. driver
 def _attempt(prob, model, guess):
-    """One solve_bvp run from a guess (t, y, params): (sol, y, diag, ok, message)."""
+    """One solve_bvp run from a guess (t, y, params): (sol, y, diag, status, message)."""
     t, y, params = guess
     solver = _solve_high_ca if model == "high-Ca" else _solve_bending
     if prob.deadline.expired():
-        return None, None, {}, False, prob.deadline.message()
+        return None, None, {}, Status.TIME_LIMIT, prob.deadline.message()
     with np.errstate(all="ignore"):        # iterates may leave the domain; judged below
         try:
             sol, y_sol = solver(prob, t, y, params)
             diag = _diagnose(prob, model, sol, y_sol)
         except _OutOfTime:
-            return None, None, {}, False, prob.deadline.message()
+            return None, None, {}, Status.TIME_LIMIT, prob.deadline.message()
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
-            return None, None, {}, False, f"not converged: solve_bvp failed ({exc})"
-    ok, message = _verdict(prob, model, diag)
-    return sol, y_sol, diag, ok, message
+            return (None, None, {}, Status.NOT_CONVERGED,
+                    f"not converged: solve_bvp failed ({exc})")
+    status, message = _verdict(prob, model, diag)
+    return sol, y_sol, diag, status, message
 
 
 def _bending_by_ca_continuation(prob, sol, y):
@@ -668,19 +673,19 @@ def _bending_by_ca_continuation(prob, sol, y):
                 y_k = y_k.copy()
                 y_k[4:6] *= path[k] / path[k - 1]
                 y_k[3] *= math.sqrt(path[k] / path[k - 1])
-            b_sol, b_y, diag, ok, message = _attempt(step, "bending", (t, y_k, params))
-            if not ok:
+            b_sol, b_y, diag, status, message = _attempt(step, "bending", (t, y_k, params))
+            if status is not Status.CONVERGED:
                 logger.debug("bending at Ca_B=%g on the path %s failed: %s", ca_b, path, message)
                 break
             if prob.deadline.expired():
-                ok, message = False, prob.deadline.message()
+                status, message = Status.TIME_LIMIT, prob.deadline.message()
                 break
             t, y_k, params = b_sol.x, b_y, b_sol.p
-        if ok:
-            return b_sol, b_y, diag, True, message
+        if status is Status.CONVERGED:
+            return b_sol, b_y, diag, status, message
         if prob.deadline.expired():
-            return None, None, diag, False, prob.deadline.message()
-    return None, None, diag, False, message
+            return None, None, diag, Status.TIME_LIMIT, prob.deadline.message()
+    return None, None, diag, status, message
 
 
 def _point(prob: _Problem, initial: LubricationResult | None, cold: bool) -> LubricationResult:
@@ -688,16 +693,18 @@ def _point(prob: _Problem, initial: LubricationResult | None, cold: bool) -> Lub
     clock = time.perf_counter()
     timings = {}
     state = initial.solver_state if initial is not None and initial.success else None
-    ok, diag, message = False, {}, "no initial guess (no warm start, cold start not allowed)"
+    status, diag = Status.NOT_CONVERGED, {}
+    message = "no initial guess (no warm start, cold start not allowed)"
     # 1) same-model warm start
     if state is not None and state[0] == prob.model:
-        sol, y, diag, ok, message = _attempt(prob, prob.model, _rescaled_guess(prob, state)[1:])
-        if ok:
+        sol, y, diag, status, message = _attempt(prob, prob.model,
+                                                 _rescaled_guess(prob, state)[1:])
+        if status is Status.CONVERGED:
             timings["total"] = time.perf_counter() - clock
             return _result(prob, prob.model, sol, y, diag, "warm start " + message, timings)
         if prob.deadline.expired():
             timings["total"] = time.perf_counter() - clock
-            return _failed(prob, prob.deadline.message(), diag, timings)
+            return _failed(prob, Status.TIME_LIMIT, prob.deadline.message(), diag, timings)
         message = "warm start " + message
         logger.debug("warm start failed: %s", message)
     # 2) high-Ca from a high-Ca warm start, else from the spherocylinder
@@ -708,18 +715,18 @@ def _point(prob: _Problem, initial: LubricationResult | None, cold: bool) -> Lub
     if cold:
         guesses.append(_spherocylinder_guess(high))
     for guess in guesses:
-        sol, y, diag, ok, message = _attempt(high, "high-Ca", guess)
-        if ok or prob.deadline.expired():
+        sol, y, diag, status, message = _attempt(high, "high-Ca", guess)
+        if status is Status.CONVERGED or prob.deadline.expired():
             break
     timings["high_ca"] = time.perf_counter() - clock
-    if ok and prob.model == "bending":
-        sol, y, diag, ok, message = _bending_by_ca_continuation(prob, sol, y)
+    if status is Status.CONVERGED and prob.model == "bending":
+        sol, y, diag, status, message = _bending_by_ca_continuation(prob, sol, y)
         timings["bending"] = time.perf_counter() - clock - timings["high_ca"]
     timings["total"] = time.perf_counter() - clock
-    if not ok:
+    if status is not Status.CONVERGED:
         logger.info("nu=%.4g lam/lam_c=%.6g %s: %s", prob.nu, prob.lam / prob.lam_c, prob.model,
                     message)
-        return _failed(prob, message, diag, timings)
+        return _failed(prob, status, message, diag, timings)
     return _result(prob, prob.model, sol, y, diag, message, timings)
 
 
@@ -729,7 +736,8 @@ def _march(prob: _Problem, start: LubricationResult, ratio: float, max_step: flo
     Each step is at most ``max_step`` and at most half the current clearance delta (delta at
     most halves or grows by half per step: tension scales like delta^(-3/2)); the step grows by
     1.5 after a success and halves after a failure, down to ``min_step``. Returns the result at
-    ``ratio``, success False if the continuation got stuck (a fold or the end of the branch).
+    ``ratio``, status NOT_CONVERGED if the continuation got stuck (a fold or the end of the
+    branch), TIME_LIMIT if ``max_time`` ran out.
     """
     min_step = MIN_STEP    # below this the branch is taken to end (or fold) here
     current, step = start, max_step
@@ -740,7 +748,8 @@ def _march(prob: _Problem, start: LubricationResult, ratio: float, max_step: flo
         if abs(gap) <= 1e-12 * ratio:
             return current
         if prob.deadline.expired():
-            return _failed(prob, f"{prob.deadline.message()} (the continuation in lam/lam_c "
+            return _failed(prob, Status.TIME_LIMIT,
+                           f"{prob.deadline.message()} (the continuation in lam/lam_c "
                                  f"had reached {here:.6g} on the way to {ratio:.6g})", {},
                            {"total": time.perf_counter() - clock})
         limit = min(step, 0.5 * (1.0 - here))
@@ -753,14 +762,16 @@ def _march(prob: _Problem, start: LubricationResult, ratio: float, max_step: flo
             continue
         step = 0.5 * min(step, abs(gap))
         if step < min_step:
-            return _failed(prob, f"continuation in lam/lam_c stuck at {here:.6g} on the way to "
+            return _failed(prob, Status.NOT_CONVERGED,
+                           f"continuation in lam/lam_c stuck at {here:.6g} on the way to "
                                  f"{ratio:.6g} (step < {min_step:g}): the branch ends or folds "
                                  f"(last converged point: curvature_rear="
                                  f"{current.curvature_rear:.3g}/R, tension_rear="
                                  f"{current.tension_rear:.3g} eta U); last attempt: "
                                  f"{trial.message}", {},
                            {"total": time.perf_counter() - clock})
-    return _failed(prob, f"continuation in lam/lam_c stopped after {MAX_CONTINUATION_STEPS} "
+    return _failed(prob, Status.NOT_CONVERGED,
+                   f"continuation in lam/lam_c stopped after {MAX_CONTINUATION_STEPS} "
                          f"steps at {current.lam / current.lam_c:.6g} on the way to {ratio:.6g}",
                    {}, {"total": time.perf_counter() - clock})
 
@@ -805,14 +816,14 @@ def solve_lubrication(nu, lam=None, *, lam_ratio=None, ca_b=math.inf, initial=No
         Largest mesh, 100 <= max_nodes <= :data:`MAX_NODES`.
     max_time : float, optional
         Wall-time budget [s], > 0; None (default): no limit. When it is spent the solve stops
-        (within one evaluation of the right-hand side) and returns ``success=False`` with the
+        (within one evaluation of the right-hand side) and returns status TIME_LIMIT with the
         reason in ``message``; it never raises for it.
 
     Returns
     -------
     LubricationResult
-        ``success`` False, NaN outputs and the reason in ``message`` when no solution passed the
-        acceptance checks or the time ran out.
+        ``status`` NOT_CONVERGED (no solution passed the acceptance checks) or TIME_LIMIT
+        (the time ran out), NaN outputs and the reason in ``message`` when it failed.
 
     Notes
     -----
@@ -823,7 +834,7 @@ def solve_lubrication(nu, lam=None, *, lam_ratio=None, ca_b=math.inf, initial=No
     the model, known before any work, so such input raises :class:`InvalidParameterError`
     (exit 2 on the command line, with the advice to give a finite ``ca_b``) instead of failing
     after a 20 s continuation. Within ~1e-3 above the tabulated end the continuation may still
-    stop: that is a solver failure, returned as ``success=False``. With Ca_B = 50 the bending
+    stop: that is a solver failure, returned as status NOT_CONVERGED. With Ca_B = 50 the bending
     model continues into parachutes down to 0.704, 0.539, < 0.1, 0.209, 0.204 (a single-point
     continuation from 0.98 at nu = 0.8 stopped at 0.177 after 135 s: the bending range depends on
     the path); there a failure is a solver limit, not known in advance, and is returned, not
@@ -861,12 +872,12 @@ def _solve_point(prob: _Problem, initial) -> LubricationResult:
     cold_nodes = prob.max_nodes if ratio >= ANCHOR_RATIO or initial is not None else 8000
     result = _point(replace(prob, max_nodes=min(prob.max_nodes, cold_nodes)), initial, cold=True)
     if (not result.success and ratio < ANCHOR_RATIO and prob.deadline.expired()
-            and prob.deadline.message() not in result.message):
+            and result.status is not Status.TIME_LIMIT):
         # the cold start failed on its own and the budget ran out meanwhile: the continuation
         # that could have reached the point was not tried, which the reason must say
-        result = replace(result, message=f"{result.message}; the continuation from lam/lam_c = "
-                                         f"{ANCHOR_RATIO:g} was not tried: "
-                                         f"{prob.deadline.message()}")
+        result = replace(result, status=Status.TIME_LIMIT,
+                         message=f"{result.message}; the continuation from lam/lam_c = "
+                                 f"{ANCHOR_RATIO:g} was not tried: {prob.deadline.message()}")
     elif not result.success and ratio < ANCHOR_RATIO and not prob.deadline.expired():
         logger.info("nu=%.4g lam/lam_c=%.6g: cold start failed, continuing from %g",
                     prob.nu, ratio, ANCHOR_RATIO)
@@ -874,7 +885,7 @@ def _solve_point(prob: _Problem, initial) -> LubricationResult:
         if anchor.success:
             result = _march(prob, anchor, ratio, MAX_STEP)
         elif prob.deadline.expired():
-            result = _failed(prob, anchor.message, {}, anchor.timings)
+            result = _failed(prob, anchor.status, anchor.message, {}, anchor.timings)
     timings = dict(result.timings, total=time.perf_counter() - clock)
     return replace(result, timings=timings)
 
@@ -908,7 +919,7 @@ def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
         Largest continuation step in lam/lam_c.
     max_time : float, optional
         Wall-time budget of the whole sweep [s]; once spent, the point being solved and all
-        points not yet solved are returned with ``success=False`` and the reason.
+        points not yet solved are returned with status TIME_LIMIT and the reason.
 
     Returns
     -------
@@ -956,10 +967,12 @@ def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
                 ratio = float(ratios[i])
                 prob = replace(base, lam=ratio * base.lam_c)
                 if base.deadline.expired():
-                    res = _failed(prob, f"not attempted: {base.deadline.message()}", {}, {})
+                    res = _failed(prob, Status.TIME_LIMIT,
+                                  f"not attempted: {base.deadline.message()}", {}, {})
                 elif not current.success:
-                    res = _failed(prob, f"not attempted: the continuation failed before "
-                                        f"lam/lam_c = {ratio:.6g} ({current.message})", {}, {})
+                    res = _failed(prob, current.status, f"not attempted: the continuation "
+                                  f"failed before lam/lam_c = {ratio:.6g} ({current.message})",
+                                  {}, {})
                 else:
                     clock = time.perf_counter()
                     res = _march(prob, current, ratio, max_step)

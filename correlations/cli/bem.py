@@ -3,9 +3,10 @@
 Registered by :func:`correlations.cli.build_parser` through :func:`add_bem_parser`; the contract
 is the one of :mod:`correlations.cli.contract` (table for people, one JSON object with ``--json``, exit
 0 / 2 invalid input with one line on stderr / 1 not converged with the JSON still printed and
-``"converged": false``). This module imports only the standard library at import time: numba,
-numpy and matplotlib load inside the command functions, so that ``vesicle-tube estimate`` stays
-fast.
+``"converged": false``). Whether a solve converged is read from its status
+(:class:`lubrication.results.Status`), written as ``"status"`` beside ``"converged"``. This
+module imports only the standard library at import time: numba, numpy and matplotlib load
+inside the command functions, so that ``vesicle-tube estimate`` stays fast.
 
 Units: R = 1, U the mean velocity, eta the viscosity; lam = a/R (sphere) or R0/R (drop, R0 the
 radius of the sphere of equal volume), Ca = eta U / gamma. In the tables the "unit" column
@@ -45,6 +46,12 @@ def _options_named():
     return options_named(_OPTIONS)
 
 
+def _converged(res) -> bool:
+    """Whether a solve converged, from its status."""
+    from lubrication.results import Status
+    return res.status is Status.CONVERGED
+
+
 def cmd_bem_sphere(args):
     """Free rigid sphere of radius lam R on the axis of Poiseuille flow."""
     from correlations.cli.contract import format_rows
@@ -52,7 +59,7 @@ def cmd_bem_sphere(args):
     from bem.solve import solve_sphere
     with _options_named():           # the solver checks its inputs before any BEM work
         res = solve_sphere(args.lam, panels=args.panels, tol=args.tol, max_time=args.max_time)
-    ok = bool(res.converged)
+    ok = _converged(res)
     out = {"command": "bem", "subcommand": "sphere"}
     out.update(res.to_dict())
     out["converged"] = ok
@@ -83,7 +90,7 @@ def _shape_result_json(res, subcommand: str, args) -> dict:
     """JSON object of a drop/vesicle result; with --out the files are written and listed
     (physical fields null and no profile rows when the solve failed)."""
     out = {"command": "bem", "subcommand": subcommand, **res.to_dict(shape=False),
-           "converged": bool(res.success)}
+           "converged": _converged(res)}
     if args.out:
         out["files"] = [str(p) for p in res.save(args.out)]
     return out
@@ -120,7 +127,7 @@ def cmd_bem_drop(args):
                          max_time=args.max_time)
     out = _shape_result_json(res, "drop", args)
     method, pm = _method_and_error(res)
-    ok = bool(res.success)
+    ok = _converged(res)
     # physical numbers from out: the result's to_dict gives None for them after a failed solve
     rows = [("confinement lam = R0/R", res.lam, "-", "input", ""),
             ("capillary number Ca = eta U/gamma", res.ca, "-", "input", ""),
@@ -158,7 +165,7 @@ def cmd_bem_vesicle(args):
                             max_time=args.max_time, **_vesicle_solver_options(args))
     out = _shape_result_json(res, "vesicle", args)
     method, pm = _method_and_error(res)
-    ok = bool(res.success)
+    ok = _converged(res)
     # physical numbers from out: the result's to_dict gives None for them after a failed solve
     curv = (f"{res.curvature_rear:.4g} / {res.curvature_front:.4g}" if ok else None)
     rows = [("reduced volume nu", res.nu, "-", "input", ""),
@@ -265,8 +272,9 @@ def cmd_bem_vesicle_sweep(args):
     table = sweep_table(results)
     r0 = results[0]
     out = {"command": "bem", "subcommand": "vesicle-sweep", "nu": r0.nu, "lam_c": r0.lam_c,
-           "ca_b": r0.ca_b, "parameters": solver, "converged": all(r.success for r in results),
-           "n_points": len(results), "n_converged": sum(bool(r.success) for r in results),
+           "ca_b": r0.ca_b, "parameters": solver,
+           "converged": all(_converged(r) for r in results), "n_points": len(results),
+           "n_converged": sum(_converged(r) for r in results),
            "points": table}
     if not out["converged"]:
         out["message"] = f"{len(results) - out['n_converged']} of {len(results)} points did " \

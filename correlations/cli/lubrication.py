@@ -2,9 +2,11 @@
 
 Follows the CLI contract of :mod:`correlations.cli.contract` (table or ``--json``; exit 0 ok, 2
 invalid input, 1 not converged or out of time, with the JSON still printed and every physical
-value of a failed solve null). Every option is checked before any solve, and the messages name
-the option as it was typed (``--lam-ratio``, not the library's ``lam_ratio``): the lubrication
-model's own range checks (:func:`lubrication.solve.check_inputs`) run with the option names.
+value of a failed solve null; whether a solve converged is read from its status, written as
+``"status"`` beside ``"converged"``). Every option is checked before any solve, and the
+messages name the option as it was typed (``--lam-ratio``, not the library's ``lam_ratio``):
+the lubrication model's own range checks (:func:`lubrication.solve.check_inputs`) run with the
+option names.
 
 Units: the table's "unit" column gives the unit the value is expressed in ("-" for a pure
 number), e.g. dp+ in eta U/R0, lengths in R, tensions in eta U; the JSON holds the same numbers
@@ -26,6 +28,7 @@ from lubrication.checks import InvalidParameterError, check_positive
 from correlations.cli.contract import (UsageError, add_max_time_option, finite_float, format_rows,
                                       format_value, positive_int)
 from lubrication.io import atomic_write, clean_json
+from lubrication.results import Status
 
 #: Option names of the inputs, for the messages of the library's checks.
 OPTION_NAMES = {"nu": "--nu", "lam": "--lam", "lam_ratio": "--lam-ratio", "ca_b": "--ca-b"}
@@ -151,22 +154,23 @@ def cmd_lubrication(args):
     max_time = _check_max_time(args)
     res = solve_lubrication(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
                             max_time=max_time)
-    out = {"command": "lubrication", **res.to_dict(), "units": UNITS}
+    ok = res.status is Status.CONVERGED
+    out = {"command": "lubrication", **res.to_dict(), "converged": ok, "units": UNITS}
     notes = []
     if args.out:
         out["files"] = [str(p) for p in res.save(args.out)]
-        if not res.success:
+        if not ok:
             notes.append("not converged: only the JSON was written (no profiles)")
     if args.plot:
-        if res.success:
+        if ok:
             from correlations.cli.contract import save_plot
             from lubrication.plotting import plot_shape
             save_plot(plot_shape(res), args.plot)
         else:
             notes.append(f"not converged: no figure written to {args.plot}")
     title = (f"Lubrication, {_model_label(res.model, res.ca_b)}: "
-             + ("converged" if res.success else "NOT CONVERGED") + f" - {res.message}")
-    return out, "\n".join([format_rows(_single_rows(out, res.success), title)] + notes)
+             + ("converged" if ok else "NOT CONVERGED") + f" - {res.message}")
+    return out, "\n".join([format_rows(_single_rows(out, ok), title)] + notes)
 
 
 def _model_label(model: str, ca_b: float) -> str:
@@ -225,10 +229,10 @@ def _sweep(args):
     results = sweep_lubrication(nu, ratios, ca_b=args.ca_b, progress=not args.json,
                                 max_time=max_time)
     table = [{k: _column(r, k) for k in SWEEP_COLUMNS} for r in results]
-    n_ok = sum(r.success for r in results)
+    n_ok = sum(r.status is Status.CONVERGED for r in results)
     converged = n_ok == len(results)
     r0 = results[0]
-    failed = [r for r in results if not r.success]
+    failed = [r for r in results if r.status is not Status.CONVERGED]
     first = min(failed, key=lambda r: r.lam_ratio) if failed else None
     message = ("all points converged" if converged else
                f"{len(failed)} of {len(results)} points did not converge; at the lowest of them, "
@@ -278,7 +282,7 @@ def _sweep_table(table, title: str) -> str:
 
 def _column(res, key):
     if key == "converged":
-        return bool(res.success)
+        return res.status is Status.CONVERGED
     value = getattr(res, key)
     if key not in ("lam_ratio", "lam", "delta", "message") and not res.success:
         return None             # no physical numbers from a failed solve

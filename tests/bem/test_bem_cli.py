@@ -88,7 +88,7 @@ def test_not_converged_exits_1_with_the_json(cli):
                        "--tol", "1e-12", "--json")
     assert code == 1
     obj = strict_json(out)
-    assert obj["converged"] is False and "refinement pair" in obj["message"]
+    assert obj["converged"] is False and obj["status"] == "not converged"
 
 
 @pytest.mark.parametrize("argv, needles", [
@@ -209,8 +209,8 @@ def test_failed_drop_prints_and_saves_no_numbers(cli, tmp_path):
     row = next(line for line in out.splitlines() if line.startswith("speed V"))
     assert "—" in row
     saved = json.loads(next(tmp_path.glob("*.json")).read_text())
-    assert saved["converged"] is False and saved["V_over_U"] is None
-    assert saved["dp_plus_R0"] is None and saved["length"] is None
+    assert saved["converged"] is False and saved["status"] == "time limit"
+    assert saved["V_over_U"] is None and saved["dp_plus_R0"] is None and saved["length"] is None
     assert next(tmp_path.glob("*.csv")).read_text().count("\n") == 1      # header only
 
 

@@ -12,6 +12,7 @@ from scipy.optimize import least_squares
 
 from bem.newton import valley_levenberg_marquardt
 from lubrication.checks import InvalidParameterError
+from lubrication.results import Status
 
 pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
 
@@ -76,7 +77,7 @@ def test_valley_solver_reports_an_invalid_start_and_recovers_from_invalid_trials
         return _banana(z), None
 
     rep = valley_levenberg_marquardt(fun, np.array([2.0, 0, 0, 0]))
-    assert not rep.success and "initial shape rejected" in rep.message
+    assert rep.status is Status.REJECTED_START and not rep.success, rep.message
     z0 = np.array([-1.2, 1.0, 0.5, -0.5])
     rep = valley_levenberg_marquardt(fun, z0, tol=1e-12, directions=1, promise=1e-12,
                                      max_jacobians=10)

@@ -333,7 +333,7 @@ def test_result_is_frozen_serialisable_and_saved_atomically(tmp_path):
     json.dumps(d)
     assert d["panels"]["body"] == 6 and d["panels_coarse"]["body"] == 4
     assert set(d["provenance"]) >= {"python", "numpy", "scipy", "numba"}
-    path = res.save(tmp_path)
+    (path,) = res.save(tmp_path)
     assert json.loads(path.read_text())["V_over_U"] == res.V_over_U
     assert [p.name for p in tmp_path.iterdir()] == [path.name]       # no temporary left
 

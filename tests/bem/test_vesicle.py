@@ -17,6 +17,7 @@ from bem.vesicle import _tension_max, solve_vesicle
 from correlations.cli import main
 from lubrication.checks import CannotPassError, InvalidParameterError
 from lubrication.geometry import critical_confinement
+from lubrication.results import Status
 
 pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
 
@@ -58,7 +59,7 @@ def test_bad_input_is_rejected_before_any_work(kwargs, exc):
 def test_mode_convergence_rejects_bad_input():
     from bem.vesicle import mode_convergence
     shaped = VesicleResult(nu=0.9, lam=1.0, lam_c=critical_confinement(0.9), ca_b=50.0,
-                           success=True, message="", modes=np.zeros(8))
+                           status=Status.CONVERGED, modes=np.zeros(8))
     with pytest.raises(InvalidParameterError, match="result"):
         mode_convergence("not a result", (16,))
     with pytest.raises(InvalidParameterError, match="result"):
@@ -151,7 +152,8 @@ def _stored_long_shape() -> VesicleResult:
     data = json.loads((Path(__file__).parent / "data" /
                        "vesicle_nu0.6_lam1.94_64modes.json").read_text())
     return VesicleResult(nu=data["nu"], lam=data["lam"], lam_c=data["lam_c"],
-                         ca_b=data["ca_b"], success=False, message="stored default shape",
+                         ca_b=data["ca_b"], status=Status.NOT_CONVERGED,
+                         message="stored default shape",
                          modes=np.array(data["modes"]), density=np.array(data["density"]))
 
 
@@ -326,7 +328,8 @@ def test_cli_reports_an_unconverged_run_with_exit_1(capsys, tmp_path):
         code = e.code
     out, _ = capsys.readouterr()
     obj = json.loads(out)
-    assert code == 1 and obj["converged"] is False and "residual" in obj["message"]
+    assert code == 1 and obj["converged"] is False and obj["status"] == "not converged"
+    assert "residual" in obj["message"]                  # names the tolerance not met
     for key in ("nu", "lam", "lam_c", "V_over_U", "dp_plus_R0", "ell", "film_min",
                 "tension_max", "shape_class", "converged", "volume_error", "area_error"):
         assert key in obj, key

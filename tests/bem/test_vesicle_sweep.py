@@ -27,6 +27,7 @@ from bem.results import VESICLE_PROFILE_COLUMNS, VesicleResult
 from bem.sweep import save_sweep, sweep_vesicle
 from correlations.cli import main
 from lubrication.checks import CannotPassError, InvalidParameterError
+from lubrication.results import Status, status_of
 
 DATA = Path(__file__).resolve().parent / "data"
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -47,6 +48,7 @@ def load_vesicle(stem: str) -> VesicleResult:
     names = [name for name, _ in VESICLE_PROFILE_COLUMNS]
     kw = {k: (math.nan if v is None else v) for k, v in data.items()
           if k in {f.name for f in dataclasses.fields(VesicleResult)} and k not in _ARRAYS}
+    kw["status"] = status_of(data)
     kw.update({name: table[:, i] for i, name in enumerate(names)})
     kw.update({k: np.array(data["shape"][k]) for k in ("modes", "density", "tension_modes")})
     return VesicleResult(**kw)
@@ -70,7 +72,8 @@ class FakeSolver:
         base = CACHED[min(CACHED, key=lambda k: abs(k - lam))]
         failed = any(abs(lam - f) < 1e-9 for f in self.fail_at)
         return dataclasses.replace(
-            base, nu=nu, lam=lam, lam_c=LAM_C, ca_b=ca_b, success=not failed,
+            base, nu=nu, lam=lam, lam_c=LAM_C, ca_b=ca_b,
+            status=Status.NOT_CONVERGED if failed else Status.CONVERGED,
             message="fake failure: residual too large" if failed else "converged (cached)",
             timings={"modes16_s": 0.0})
 

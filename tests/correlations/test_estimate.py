@@ -683,10 +683,12 @@ class FakeBem:
 
     def __call__(self, nu, lam=None, *, ca_b=50.0, **kwargs):
         from bem.results import VesicleResult
+        from lubrication.results import Status
         self.calls.append((nu, lam, ca_b))
         self.kwargs = kwargs
         return VesicleResult(nu=nu, lam=lam, lam_c=ref_lam_c(nu), ca_b=ca_b,
-                             success=self.success, message="fake: no convergence"
+                             status=Status.CONVERGED if self.success else Status.NOT_CONVERGED,
+                             message="fake: no convergence"
                              if not self.success else "fake", V_over_U=1.2345,
                              dp_plus_R0=123.4, ell=3.21, film_min=0.0432, tension_front=6.5,
                              tension_max=7.5, shape_class="parachute")

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from correlations.infer import Status, infer_cell, infer_map
+from correlations.infer import Verdict, infer_cell, infer_map
 from correlations.solution_map import DEFAULT_MAP
 from lubrication.checks import InvalidParameterError
 
@@ -69,7 +69,7 @@ def test_recovers_every_bem_solution_with_sampling():
 
 def test_refuses_data_no_steady_vesicle_matches():
     r = infer_map(1.9, 20.0)
-    assert r.status is Status.INCONSISTENT
+    assert r.status is Verdict.INCONSISTENT
     assert "inconsistent with any steady axisymmetric vesicle" in r.message
     assert r.fit.chi > 3
 

@@ -187,7 +187,7 @@ def test_tiny_lubrication_build_packs_and_queries_back_its_points(tiny_build):
     assert summary["done"] == summary["total"] == 6 and summary["missing"] == 0
     m = load_map(summary["map"])
     for p in read_points(folder):
-        assert p["success"], p["message"]
+        assert p["success"] and p["status"] == "converged", p["message"]
         assert p["provenance"]["solver"]["name"] == "lubrication.solve.solve_lubrication"
         assert p["provenance"]["git_commit"] and p["provenance"]["vesicle-tube"]
         res = query_map(p["nu"], p["lam_ratio"], p["ca_b"], m)
@@ -361,5 +361,6 @@ def test_a_neighbour_shape_that_cannot_start_falls_back_to_the_own_seed(monkeypa
     warm = {"nu": 0.9, "lam_ratio": 0.9, "shape": {"modes": [0.0], "density": [1.0]}}
     fields, _ = map_build._solve_bem(0.85, 0.9, 25.0, warm, {}, None)
     assert calls == ([None] if where == "rescaling" else ["neighbour curve", None])
-    assert fields["success"] and fields["seed"] == "lubrication"
+    assert fields["success"] and fields["status"] == "converged"
+    assert fields["seed"] == "lubrication"
     assert fields["failed_starts"][0].startswith("neighbour (nu=0.9, lam/lam_c=0.9): cannot start")

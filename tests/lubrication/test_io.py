@@ -12,6 +12,7 @@ from hypothesis import given, strategies as st
 
 import lubrication
 from lubrication.io import clean_json, provenance, save_result, write_json
+from lubrication.results import Status
 
 
 def _strict(text: str):
@@ -76,19 +77,19 @@ def test_result_writers_write_non_finite_numbers_as_null(tmp_path):
     from bem.sweep import save_sweep
     from lubrication.results import LubricationResult
 
+    failed = {"status": Status.NOT_CONVERGED, "message": "failed"}
     lub = LubricationResult(nu=0.9, lam=1.0, lam_c=1.2, ca_b=math.inf, model="high-Ca",
-                            success=False, message="failed", timings={"total_s": math.nan})
-    drop = DropResult(lam=0.8, ca=0.1, success=False, message="failed",
-                      error_estimate={"V_over_U": math.nan})
-    ves = VesicleResult(nu=0.9, lam=1.0, lam_c=1.2, ca_b=50.0, success=False, message="failed",
-                        refinement=[[16, math.inf, math.nan, math.nan, math.nan]])
+                            timings={"total_s": math.nan}, **failed)
+    drop = DropResult(lam=0.8, ca=0.1, error_estimate={"V_over_U": math.nan}, **failed)
+    ves = VesicleResult(nu=0.9, lam=1.0, lam_c=1.2, ca_b=50.0,
+                        refinement=[[16, math.inf, math.nan, math.nan, math.nan]], **failed)
     sphere = SphereResult(lam=0.5, V_over_U=1.6, dp_plus_R=0.5, dp_plus_R0=0.25, drag_K=5.9,
                           dp_translating_R=-3.0, V_over_U_err=math.nan, dp_plus_R_err=math.inf,
-                          drag_K_err=np.float64(1e-9), converged=True, tol=1e-8, panels={},
+                          drag_K_err=np.float64(1e-9), status=Status.CONVERGED, tol=1e-8, panels={},
                           panels_coarse={}, half_length=math.nan, residual=1e-15,
                           null_multiplier=0.0, timings={})
     paths = [*lub.save(tmp_path), *drop.save(tmp_path), *ves.save(tmp_path),
-             sphere.save(tmp_path), *save_sweep(tmp_path / "sweep", [ves], profiles=False)]
+             *sphere.save(tmp_path), *save_sweep(tmp_path / "sweep", [ves], profiles=False)]
     saved = {p.name: _strict(p.read_text()) for p in paths if p.suffix == ".json"}
     assert len(saved) == 5
     lub_d = next(v for k, v in saved.items() if k.startswith("lubrication"))
@@ -128,10 +129,10 @@ def test_every_result_records_the_one_provenance(make):
     from lubrication.solve import solve_lubrication
 
     if make == "bem_drop":
-        p = DropResult(lam=0.8, ca=0.1, success=False, message="").provenance
+        p = DropResult(lam=0.8, ca=0.1, status=Status.NOT_CONVERGED).provenance
     elif make == "bem_vesicle":
-        p = VesicleResult(nu=0.9, lam=1.0, lam_c=1.2, ca_b=50.0, success=False,
-                          message="").provenance
+        p = VesicleResult(nu=0.9, lam=1.0, lam_c=1.2, ca_b=50.0,
+                          status=Status.NOT_CONVERGED).provenance
     else:
         p = solve_lubrication(0.9, lam_ratio=0.9, tol=1e-4).provenance
     assert set(p) == set(provenance())

@@ -266,7 +266,7 @@ def test_failed_solve_reports_no_numbers_anywhere(cli, tmp_path):
     (saved,) = tmp_path.iterdir()
     assert saved.suffix == ".json" and "failed" in saved.name
     data = json.loads(saved.read_text())
-    assert data["converged"] is False and data["ca_b"] is None
+    assert data["converged"] is False and data["status"] == "time limit" and data["ca_b"] is None
     for key in ("V_over_U", "Q", "dp_plus_R0", "dp_plus_R", "ell", "film_min", "tension_front",
                 "tension_rear", "tension_max", "curvature_rear", "curvature_front"):
         assert data[key] is None, key
@@ -322,4 +322,5 @@ def test_max_time_bounds_a_long_solve(cli):
     code, out, err = cli("lubrication", "--nu", "0.9", "--lam-ratio", "0.61", "--max-time", "1",
                          "--json")
     assert code == 1 and time.perf_counter() - clock < 3.0
-    assert "max_time=1 s" in json.loads(out)["message"]
+    obj = json.loads(out)
+    assert obj["status"] == "time limit" and "max_time=1 s" in obj["message"]

@@ -27,7 +27,7 @@ import lubrication.solve as solve_mod
 from lubrication.asymptotics import speed_slope_near_critical
 from lubrication.checks import CannotPassError, InvalidParameterError
 from lubrication.geometry import critical_length
-from lubrication.results import PROFILE_COLUMNS, LubricationResult
+from lubrication.results import PROFILE_COLUMNS, LubricationResult, Status
 from lubrication.solve import CONSTRAINT_TOL, FORCE_TOL, solve_lubrication, sweep_lubrication
 
 pytestmark = pytest.mark.numerics   # re-run on another code path by make test-portable
@@ -202,11 +202,10 @@ def test_warm_start_from_a_neighbour(high_ca):
 
 def test_non_convergence_is_a_result_not_a_number():
     res = solve_lubrication(0.9, lam_ratio=0.99, max_nodes=100)
-    assert not res.success
-    assert "not converged" in res.message
+    assert res.status is Status.NOT_CONVERGED and not res.success
     assert math.isnan(res.V_over_U) and math.isnan(res.dp_plus_R0) and res.x.size == 0
     d = res.to_dict()
-    assert d["converged"] is False and d["V_over_U"] is None
+    assert d["converged"] is False and d["status"] == "not converged" and d["V_over_U"] is None
 
 
 def test_to_dict_and_atomic_save(high_ca, tmp_path):
@@ -318,7 +317,7 @@ def test_end_of_the_high_ca_branch_is_where_the_table_says(monkeypatch):
         solve_lubrication(0.6, lam_ratio=0.85)
     monkeypatch.setattr(solve_mod, "HIGH_CA_BRANCH_END", ((0.0, 0.0), (1.0, 0.0)))
     res = solve_lubrication(0.6, lam_ratio=0.85)
-    assert not res.success and "stuck" in res.message and math.isnan(res.V_over_U)
+    assert res.status is Status.NOT_CONVERGED and math.isnan(res.V_over_U)
     stuck = float(res.message.split("stuck at ")[1].split()[0])
     assert abs(stuck - end) < 2e-3
 
@@ -404,11 +403,12 @@ def test_cold_start_failing_as_the_budget_runs_out_names_the_budget(monkeypatch)
     could reach the point is not tried, and the reason says so (with the solver's own)."""
     def failing(prob, initial, cold):
         time.sleep(0.06)
-        return solve_mod._failed(prob, "not converged: a stand-in failure", {}, {})
+        return solve_mod._failed(prob, Status.NOT_CONVERGED, "not converged: a stand-in failure",
+                                 {}, {})
 
     monkeypatch.setattr(solve_mod, "_point", failing)
     res = solve_lubrication(0.9, lam_ratio=0.61, ca_b=math.inf, max_time=0.05)
-    assert not res.success
+    assert res.status is Status.TIME_LIMIT
     assert "a stand-in failure" in res.message and "max_time=0.05" in res.message
     assert "continuation" in res.message
 
@@ -426,7 +426,7 @@ def test_spent_time_budget_is_a_failed_result_not_an_exception(ca_b):
         res = solve_lubrication(0.9, lam_ratio=0.61, ca_b=ca_b, max_time=max_time)
         spent = time.perf_counter() - clock
         assert spent < max_time + 1.0 and not res.success
-        assert "max_time" in res.message or spent < max_time, res.message
+        assert res.status is Status.TIME_LIMIT or spent < max_time, res.message
         assert math.isnan(res.V_over_U) and math.isnan(res.dp_plus_R0) and res.x.size == 0
         d = res.to_dict()
         assert d["V_over_U"] is None and d["tension_max"] is None and d["converged"] is False
@@ -438,7 +438,7 @@ def test_spent_time_budget_in_a_sweep_fails_the_remaining_points():
     out = sweep_lubrication(0.9, [0.9, 0.95, 0.99], progress=False, max_time=0.05)
     assert time.perf_counter() - clock < 1.5
     assert [r.success for r in out] == [False, False, False]
-    assert all("max_time" in r.message and math.isnan(r.V_over_U) for r in out)
+    assert all(r.status is Status.TIME_LIMIT and math.isnan(r.V_over_U) for r in out)
 
 
 def test_failed_result_saves_json_only_without_numbers(tmp_path):
