@@ -2,7 +2,7 @@
 dataset to calibrate the inverse estimate ``vesicle-tube infer`` (correlations/infer.py).
 
 Run with ``python tests/benchmarks/infer_truth.py [--points N] [--seed S] [--out FILE]
-[--max-time SECONDS]`` (defaults 64 points, seed 2027, docs/data/infer_truth.json, 240 s);
+[--max-time SECONDS]`` (defaults 128 points, seed 2027, docs/data/infer_truth.json, 240 s);
 on 2 shared cores, e.g. ``NUMBA_NUM_THREADS=1 nice -n 10 .venv/bin/python
 tests/benchmarks/infer_truth.py``.
 
@@ -51,7 +51,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "data" / "infer_truth.json"
 SEED = 2027
-POINTS = 64
+POINTS = 128
 MAX_TIME_S = 240.0
 #: outputs recorded from a converged solve (names of :class:`bem.results.VesicleResult`)
 OUTPUTS = ("V_over_U", "ell", "dp_plus_R0", "film_min")
@@ -110,7 +110,7 @@ def _attempt(nu: float, r: float, ca: float, options: dict, max_time: float):
         return None, {"options": options, "success": False, "seconds":
                       round(time.perf_counter() - t0, 1),
                       "message": f"{type(exc).__name__}: {exc}"}
-    return res, {"options": options, "success": bool(res.success),
+    return res, {"options": options, "success": bool(res.success), "status": res.status.value,
                  "seconds": round(time.perf_counter() - t0, 1), "message": res.message,
                  "modes": int(res.modes.size), "bie_solves": res.bie_solves}
 
@@ -133,11 +133,12 @@ def solve_point(index: int, nu: float, r: float, ca: float, max_time: float,
     time-out), numbers only from a converged attempt."""
     from lubrication.geometry import critical_confinement
     from lubrication.io import clean_json, provenance
+    from lubrication.results import Status, status_of
     attempts = []
     res, rec = _attempt(nu, r, ca, {}, max_time)
     attempts.append(rec)
     if not rec["success"]:
-        if "time limit" in rec["message"]:
+        if status_of(rec) is Status.TIME_LIMIT:
             rec["retry"] = "none: the default solve stopped at the time limit"
         else:
             res, rec = _attempt(nu, r, ca, retry_options(nu, r), max_time)
