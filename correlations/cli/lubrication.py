@@ -162,15 +162,22 @@ def cmd_lubrication(args):
         if not ok:
             notes.append("not converged: only the JSON was written (no profiles)")
     if args.plot:
-        if ok:
-            from correlations.cli.contract import save_plot
-            from lubrication.plotting import plot_shape
-            save_plot(plot_shape(res), args.plot)
-        else:
-            notes.append(f"not converged: no figure written to {args.plot}")
+        notes += _plot(ok, "shape", res, args.plot, "not converged")
     title = (f"Lubrication, {_model_label(res.model, res.ca_b)}: "
              + ("converged" if ok else "NOT CONVERGED") + f" - {res.message}")
     return out, "\n".join([format_rows(_single_rows(out, ok), title)] + notes)
+
+
+def _plot(ok: bool, kind: str, what, path, failed: str) -> list[str]:
+    """Draw ``what`` (a result for ``kind`` "shape", results for "sweep") to ``path`` when
+    ``ok``; else the note that says why no figure was written."""
+    if not ok:
+        return [f"{failed}: no figure written to {path}"]
+    from correlations.cli.contract import save_plot
+    from lubrication import plotting                 # lazy: matplotlib
+    draw = plotting.plot_shape if kind == "shape" else plotting.plot_sweep
+    save_plot(draw(what), path)
+    return []
 
 
 def _model_label(model: str, ca_b: float) -> str:
@@ -248,12 +255,7 @@ def _sweep(args):
     if args.out:
         out["files"] = [str(_write_sweep_csv(Path(args.out), results, table))]
     if args.plot:
-        if n_ok:
-            from correlations.cli.contract import save_plot
-            from lubrication.plotting import plot_sweep
-            save_plot(plot_sweep(results), args.plot)
-        else:
-            notes.append(f"no point converged: no figure written to {args.plot}")
+        notes += _plot(n_ok, "sweep", results, args.plot, "no point converged")
     title = (f"Lubrication sweep: nu = {r0.nu:g}, lam_c = {r0.lam_c:.6g}, "
              f"{_model_label(r0.model, r0.ca_b)}: {n_ok}/{len(results)} points converged")
     if failed:
