@@ -17,24 +17,23 @@ Public entry points: :func:`bem.solve.solve_sphere`, :func:`bem.solve.sphere_dra
 and :func:`bem.vesicle_dynamics.relax_vesicle`.
 """
 
+from .results import DropResult, SphereResult, VesicleResult
+from .solve import solve_sphere, sphere_drag
+
 __all__ = ["DropResult", "SphereResult", "VesicleResult", "solve_drop", "solve_sphere",
            "solve_vesicle", "sphere_drag", "sweep_vesicle"]
 
 
-def __getattr__(name):          # lazy: importing bem does not load numba
-    if name in ("solve_sphere", "sphere_drag"):
-        from . import solve
-        return getattr(solve, name)
+def __getattr__(name):
+    """The drop and vesicle solvers on first use: they load scipy.linalg, scipy.interpolate
+    and scipy.fft (~0.3 s), which the sphere solver and ``import bem.shape`` do without."""
     if name == "solve_drop":
-        from .drop import solve_drop
+        from .drop import solve_drop  # lazy: scipy.linalg off `import bem`
         return solve_drop
     if name == "sweep_vesicle":
-        from .sweep import sweep_vesicle
+        from .sweep import sweep_vesicle  # lazy: scipy (bem.vesicle) off `import bem`
         return sweep_vesicle
     if name == "solve_vesicle":
-        from .vesicle import solve_vesicle
+        from .vesicle import solve_vesicle  # lazy: scipy (bem.vesicle) off `import bem`
         return solve_vesicle
-    if name in ("SphereResult", "DropResult", "VesicleResult"):
-        from . import results
-        return getattr(results, name)
-    raise AttributeError(name)
+    raise AttributeError(f"module 'bem' has no attribute {name!r}")

@@ -93,6 +93,7 @@ from .quadrature import (
     influence,
     panels_on_curve,
 )
+from .results import DropResult
 from .shape import SpectralCurve, equidistributing_density, fit_curve
 from .threads import single_threaded_blas
 
@@ -699,8 +700,6 @@ def solve_drop(lam: float, ca: float, *, n_modes: int | None = None, tol: float 
     >>> round(res.dp_plus_R0 / (4.8 * 0.3**6), 3)
     1.006
     """
-    from .results import DropResult
-
     t_start = time.perf_counter()
     lam, ca, n_modes, tol, residual_tol, max_modes = check_drop_inputs(
         lam, ca, n_modes=n_modes, tol=tol, residual_tol=residual_tol, max_modes=max_modes,

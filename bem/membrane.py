@@ -39,7 +39,7 @@ import scipy.fft
 
 from lubrication.checks import check_range
 
-from .shape import SpectralCurve, gauss_legendre01
+from .shape import SpectralCurve, cosine_series, gauss_legendre01, sine_series
 
 __all__ = ["bending_energy", "bending_force", "mean_curvature_series", "surface_laplacian_H",
            "tension_basis", "tension_force", "tension_profile"]
@@ -67,8 +67,6 @@ def _cos_series(c, tau, deriv=0):
     """sum_k c_k d^n/dtau^n cos(k pi tau), k = 0..len(c)-1, n = deriv in 0, 1, 2 (tau an
     array), by the Clenshaw recurrences of :mod:`bem.shape` (the derivative series are the
     sine and cosine series of k c_k and k^2 c_k)."""
-    from .shape import cosine_series, sine_series
-
     c = np.asarray(c, dtype=float)
     tau = np.asarray(tau, dtype=float)
     th = np.pi * tau

@@ -12,6 +12,14 @@ import numpy as np
 __all__ = ["plot_shape", "plot_vesicle_sweep"]
 
 
+def _new_axes(ax, figsize):
+    """``ax``, or the Axes of a new headless :class:`matplotlib.figure.Figure` (no pyplot)."""
+    if ax is None:
+        from matplotlib.figure import Figure  # lazy: matplotlib
+        ax = Figure(figsize=figsize).add_subplot()
+    return ax
+
+
 def draw_tube(ax, half: float) -> None:
     """Tube wall r = ±R over |x| <= half, axis, flow arrow, equal axes with labels."""
     for y in (1.0, -1.0):
@@ -43,9 +51,7 @@ def plot_shape(result, ax=None):
     -------
     matplotlib.axes.Axes
     """
-    if ax is None:
-        from matplotlib.figure import Figure  # lazy: importing bem needs no matplotlib
-        ax = Figure(figsize=(7.0, 3.0)).add_subplot()
+    ax = _new_axes(ax, (7.0, 3.0))
     x = np.asarray(getattr(result, "x", np.empty(0)), dtype=float)
     r = np.asarray(getattr(result, "r", np.empty(0)), dtype=float)
     if x.size == 0:                                    # rigid sphere: a circle of radius lam
@@ -94,11 +100,9 @@ def plot_vesicle_sweep(results, ax=None):
     -------
     matplotlib.axes.Axes
     """
-    import matplotlib as mpl
+    import matplotlib as mpl  # lazy: matplotlib
 
-    if ax is None:
-        from matplotlib.figure import Figure  # lazy: importing bem needs no matplotlib
-        ax = Figure(figsize=(7.5, 3.2)).add_subplot()
+    ax = _new_axes(ax, (7.5, 3.2))
     results = list(results)
     lams = np.array([r.lam for r in results], dtype=float)
     lo, hi = (float(lams.min()), float(lams.max())) if lams.size else (0.0, 1.0)

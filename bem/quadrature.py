@@ -37,6 +37,8 @@ import numpy as np
 
 from lubrication.checks import InvalidParameterError, check_positive, check_range
 
+from ._log_rule_table import NODES as LOG_RULE_NODES, WEIGHTS as LOG_RULE_WEIGHTS
+
 __all__ = [
     "DEFAULT_ORDER",
     "DEFAULT_TOL",
@@ -154,7 +156,7 @@ def fit_log_rule(n_basis: int) -> tuple[np.ndarray, np.ndarray]:
     The fit's basis has condition ~5e16, so which nodes it keeps follows the rounding of
     numpy's log and of LAPACK's QR: on other CPUs it returns another, equally exact rule.
     """
-    from scipy.optimize import nnls
+    from scipy.optimize import nnls  # lazy: scipy.optimize, only to fit a new rule
 
     u, w = _graded_rule()
     V = np.polynomial.legendre.legvander(2.0 * u - 1.0, n_basis - 1)
@@ -174,8 +176,7 @@ def log_rule(n_basis: int = SELF_BASIS) -> tuple[np.ndarray, np.ndarray]:
     AVX-512 keeps a node at 2e-8, where the kernel derivatives of the linearised Jacobian
     lose digits to the rounding of the node's distance to the target."""
     if n_basis == SELF_BASIS:
-        from ._log_rule_table import NODES, WEIGHTS
-        u, w = np.array(NODES), np.array(WEIGHTS)
+        u, w = np.array(LOG_RULE_NODES), np.array(LOG_RULE_WEIGHTS)
     else:
         u, w = fit_log_rule(n_basis)
     u.flags.writeable = False
@@ -331,7 +332,7 @@ def influence(targets_x, targets_r, panels: PanelSet, *, near: float | None = NE
     as_tol = float(check_range("tol", tol, 1e-16, 1e-2))
     p = panels.order
     as_near = near_factor(p, as_tol) if near is None else float(check_positive("near", near))
-    from . import kernels  # lazy: input checks of the solvers run before numba loads
+    from . import kernels  # lazy: numba
 
     t, _ = gauss_legendre(p)
     gx, gw = gauss_table()
@@ -366,7 +367,7 @@ def influence_pair(a: PanelSet, b: PanelSet, *, near: float | None = NEAR_FACTOR
     as_tol = float(check_range("tol", tol, 1e-16, 1e-2))
     p = a.order
     as_near = near_factor(p, as_tol) if near is None else float(check_positive("near", near))
-    from . import kernels
+    from . import kernels  # lazy: numba
 
     t, _ = gauss_legendre(p)
     gx, gw = gauss_table()
@@ -386,7 +387,7 @@ def integrate_panel(x0: float, r0: float, panels: PanelSet, index: int, density,
     ``density`` is an array (p, 2) of node values of ``q`` on panel ``index``; returns the
     2-vector of the integral. Works for targets on, near or far from the panel.
     """
-    from . import kernels
+    from . import kernels  # lazy: numba
 
     p = panels.order
     t, _ = gauss_legendre(p)

@@ -26,6 +26,8 @@ import numpy as np
 from lubrication.io import clean_json
 from lubrication.results import SolverResult, VesicleSolution, profile_field
 
+from .shape import SpectralCurve
+
 __all__ = ["DROP_PROFILE_COLUMNS", "VESICLE_PROFILE_COLUMNS", "DropResult", "SphereResult",
            "VesicleResult"]
 
@@ -111,7 +113,6 @@ class _SpectralSolution(SolverResult):
 
     def curve(self):
         """The fine solution's :class:`bem.shape.SpectralCurve` (centroid at x = 0)."""
-        from .shape import SpectralCurve
         return SpectralCurve.closed(self.modes, volume=4.0 / 3.0 * math.pi * self.lam**3,
                                     density=self.density)
 

@@ -58,7 +58,7 @@ def gauss_legendre01(m: int) -> tuple[np.ndarray, np.ndarray]:
 
 def sine_series(c: np.ndarray, theta):
     """b_1 of the Clenshaw recurrence, so that sum_k c_k sin(k theta) = b_1 sin(theta)."""
-    from . import series  # lazy: the input checks of the solvers run before numba loads
+    from . import series  # lazy: numba
 
     theta = np.asarray(theta, dtype=float)
     c = np.ascontiguousarray(c, dtype=float)
@@ -67,7 +67,7 @@ def sine_series(c: np.ndarray, theta):
 
 def cosine_series(d: np.ndarray, theta):
     """sum_{k=1}^N d_k cos(k theta) by the Clenshaw recurrence (0 for empty d)."""
-    from . import series
+    from . import series  # lazy: numba
 
     theta = np.asarray(theta, dtype=float)
     d = np.ascontiguousarray(d, dtype=float)
@@ -202,7 +202,7 @@ class SpectralCurve:
         agreement with a 4x finer single rule per point (tests). Against the former 16-point
         rule per gap between neighbouring points, a curve's 256 panel nodes of one half cost
         0.34 instead of 1.29 ms at 96 modes (30 points: 0.26 against 0.21 ms)."""
-        from . import series
+        from . import series  # lazy: numba
 
         u = np.asarray(u, dtype=float)
         flat = u.ravel()

@@ -50,6 +50,9 @@ from lubrication.checks import Deadline, InvalidParameterError, as_finite
 from lubrication.io import atomic_write, clean_json, write_json
 from lubrication.results import Status
 
+from . import vesicle
+from .results import VesicleResult
+
 __all__ = ["MAX_POINTS", "SWEEP_COLUMNS", "save_sweep", "sweep_table", "sweep_vesicle"]
 
 log = logging.getLogger(__name__)
@@ -86,8 +89,6 @@ Progress = Callable[[int, int, object, float], None]
 def confinements(nu, lams, lam_ratios, ca_b) -> tuple[float, np.ndarray, float, float]:
     """Checked (nu, lam of each point, lam_c, ca_b), with the single-point checks of
     :func:`bem.vesicle.solve_vesicle` applied to every point (0 < lam < lam_c(nu))."""
-    from .vesicle import check_vesicle_case
-
     if (lams is None) == (lam_ratios is None):
         given = "neither" if lams is None else "both lams and lam_ratios"
         raise InvalidParameterError("lams", given, "exactly one of lams and lam_ratios")
@@ -103,8 +104,8 @@ def confinements(nu, lams, lam_ratios, ca_b) -> tuple[float, np.ndarray, float, 
                                     f"at most {MAX_POINTS} points",
                                     "each point is a full vesicle solve (seconds to minutes)")
     by_ratio = lam_ratios is not None
-    points = [check_vesicle_case(nu, None if by_ratio else v, v if by_ratio else None, ca_b)
-              for v in map(float, values)]
+    points = [vesicle.check_vesicle_case(nu, None if by_ratio else v, v if by_ratio else None,
+                                         ca_b) for v in map(float, values)]
     return points[0][0], np.array([p[1] for p in points]), points[0][2], points[0][3]
 
 
@@ -162,9 +163,6 @@ def sweep_vesicle(nu: float, lams: Sequence[float] | None = None, *,
     >>> [r.lam for r in out], [r.success for r in out], out[0].seed    # doctest: +SKIP
     ([0.4, 0.3], [True, True], 'initial')
     """
-    from . import vesicle  # numba loads only when the first point is solved
-    from .results import VesicleResult
-
     nu, lam, lam_c, ca_b = confinements(nu, lams, lam_ratios, ca_b)
     for key in ("lam", "lam_ratio", "max_time"):
         if key in solver_kwargs:

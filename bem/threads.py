@@ -23,6 +23,10 @@ import os
 from contextlib import contextmanager
 from functools import cache
 
+# the BLAS libraries must be loaded for _setters to find them: numpy's and scipy's each bring one
+import numpy.linalg  # noqa: F401
+import scipy.linalg  # noqa: F401
+
 __all__ = ["single_threaded_blas"]
 
 
@@ -49,9 +53,6 @@ def _setters() -> tuple:
 @contextmanager
 def single_threaded_blas():
     """Run the block with one OpenBLAS thread in the calling thread (module docstring)."""
-    import numpy.linalg  # noqa: F401  (the BLAS libraries must be loaded to be found)
-    import scipy.linalg  # noqa: F401
-
     setters = _setters()
     previous = [fn(1) for fn in setters]
     try:

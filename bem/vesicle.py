@@ -356,10 +356,12 @@ from contextlib import nullcontext
 import numpy as np
 import scipy.linalg as sla
 from scipy.interpolate import CubicSpline
+from scipy.optimize import minimize_scalar
 
 from lubrication.checks import Deadline, InvalidParameterError, check_positive, check_range
-from lubrication.geometry import critical_length, resolve_confinement
-from lubrication.results import Status, leading_status
+from lubrication.geometry import critical_confinement, critical_length, resolve_confinement
+from lubrication.results import LubricationResult, Status, leading_status
+from lubrication.solve import solve_lubrication
 
 from .assembly import poiseuille
 from .drop import DropDiscretisation, DropOperator, panels_for
@@ -379,6 +381,7 @@ from .quadrature import (
     self_rule_panels,
     serial_assembly,
 )
+from .results import VesicleResult
 from .shape import (
     SpectralCurve,
     equidistributing_density,
@@ -600,7 +603,7 @@ class VesicleOperator(DropOperator):
         nodes with their derivatives in the panels' Legendre coefficients and the nodes
         (:func:`bem.kernels.near_panels_taylor`: the integrand differentiated on the rule of
         each pair, 7 ring Stokeslets per quadrature point), once for all the points."""
-        from . import kernels
+        from . import kernels  # lazy: numba
 
         wall = self.wall
         nw, nb = wall.n_nodes, base.n_nodes
@@ -667,7 +670,7 @@ class VesicleOperator(DropOperator):
         displacements; for a difference Jacobian, steps ~1e-7), all points in a few products,
         one pass through the near blocks (:func:`bem.kernels.near_products_taylor`) and one
         wall solve."""
-        from . import kernels
+        from . import kernels  # lazy: numba
 
         ok = [k for k, pt in enumerate(parts) if pt is not None]
         out = [None] * len(parts)
@@ -796,10 +799,6 @@ def lubrication_seed(nu: float, lam: float, ca_b: float, n_modes: int,
     steady state (residual 1.5e-2 at every mode count from 40 to 64). None if the solver
     fails (or runs out of ``max_time`` seconds) or the fit is rejected. Returns (curve,
     lubrication result), the latter solved to the BVP tolerance ``SEED_LUBRICATION_TOL``."""
-    from lubrication.solve import solve_lubrication
-
-    from lubrication.geometry import critical_confinement
-
     deadline = Deadline(max_time)
     lub = None
     for target in (lam, NEAR_CRITICAL * critical_confinement(nu)):
@@ -880,8 +879,6 @@ def capsule_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
     larger root is :math:`a = \lambda/\lambda_c(\nu) < 1`, so the capsule fits in the tube
     whenever the vesicle can pass (a prolate spheroid of small nu and large lam does not).
     """
-    from lubrication.geometry import critical_confinement
-
     a = lam / critical_confinement(nu)
     length = (4.0 * math.pi * (lam * nu ** (-1.0 / 3.0)) ** 2 - 4.0 * math.pi * a * a) \
         / (2.0 * math.pi * a)
@@ -944,7 +941,7 @@ def _prolonged_columns(coarse: VesicleOperator, coarse_state: dict, op: VesicleO
 def _workers() -> int:
     """Threads for independent evaluations: numba's thread count (NUMBA_NUM_THREADS, or
     :func:`numba.set_num_threads`), so that one setting bounds both."""
-    import numba
+    import numba  # lazy: numba
 
     return max(1, int(numba.get_num_threads()))
 
@@ -1160,8 +1157,6 @@ def _refined_extremum(f, n: int = 401) -> tuple[float, float]:
     equally spaced samples, refined by a bounded scalar search between its neighbours (a
     sampled maximum differs between parametrisations by its sampling error, 1e-5 relative for
     γ_max at 401 samples, which the refinement pair would read as discretisation error)."""
-    from scipy.optimize import minimize_scalar
-
     t = np.linspace(0.0, 1.0, n)
     v = f(t)
     i = int(np.argmax(v))
@@ -1384,10 +1379,6 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     InvalidParameterError, CannotPassError
         Bad input; lam >= lam_c(nu).
     """
-    from lubrication.results import LubricationResult
-
-    from .results import VesicleResult
-
     t_start = time.perf_counter()
     (nu, lam, lam_c, ca_b, n_modes, tol, tension_tol, residual_tol, max_modes, rung_modes,
      density_terms, max_iter) = check_vesicle_inputs(
@@ -1690,8 +1681,6 @@ def mode_convergence(result, modes, *, density: str | None = "bend", density_ter
         contraction per level: a constant ratio ρ < 1 is geometric (spectral) convergence,
         and the error of the last level is about ρ/(1 - ρ) times its last difference).
     """
-    from .results import VesicleResult
-
     if not isinstance(result, VesicleResult) or result.modes.size == 0:
         raise InvalidParameterError("result", type(result).__name__,
                                     "a VesicleResult with a shape")

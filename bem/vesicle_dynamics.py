@@ -76,6 +76,7 @@ from .membrane import tension_profile
 from .newton import difference_jacobian
 from .quadrature import PanelSet, barycentric_weights, gauss_legendre
 from .shape import SpectralCurve
+from .vesicle import VesicleOperator, vesicle_discretisation
 
 __all__ = ["VesicleFlow", "centroid_velocity", "inextensible_tension", "quiescent_velocity",
            "relax_vesicle", "relaxation_rate_brochard_lennon_1975", "surface_divergence",
@@ -222,8 +223,6 @@ def quiescent_velocity(op, curve: SpectralCurve):
 def vesicle_operator(result, n_tension: int | None = None):
     """:class:`bem.vesicle.VesicleOperator` at the parameters and resolution of a
     :class:`bem.results.VesicleResult`, its shape the reference (wall, inlet, panel breaks)."""
-    from .vesicle import VesicleOperator, vesicle_discretisation
-
     pan = result.panels
     disc = vesicle_discretisation(int(pan["modes"]), int(pan["order"]), int(pan["drop"]))
     return VesicleOperator(result.nu, result.lam, result.ca_b, disc, result.curve(),

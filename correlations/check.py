@@ -73,11 +73,19 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-from lubrication.checks import InvalidParameterError, OutOfRangeWarning, check_range
+from lubrication import asymptotics
+from lubrication.checks import OUTPUT_BOUNDS, InvalidParameterError, OutOfRangeWarning, check_range
 from lubrication.geometry import (cell_from_volume_area, check_reduced_volume,
                                   confinement_from_diameter, critical_confinement, volume_radius)
+from lubrication.io import provenance
+from bem.solve import check_sphere_inputs, solve_sphere
 
-from .registry import MAP_DEFAULT_CA_B
+from .estimate import PHYSICAL_BOUNDS, physical_scales
+from .pressure import dp_plus_film_chen2020
+from .registry import (MAP_DEFAULT_CA_B, SMALL_VESICLE_RANGE, MethodNotApplicable, guarded,
+                       map_method_name, map_query, resolve_solution_map)
+from .shape import SHAPE_CLASS_RANGE_CHEN2020, shape_class_chen2020
+from .solution_map import outside_reason
 
 __all__ = ["COLUMNS", "ERROR_COLUMNS", "KINDS", "WARN_FACTOR", "Verdict", "InputError", "Row",
            "Reference", "CheckResult", "RowReport", "CheckReport", "TOLERANCE_RULE", "format_cell",
@@ -405,7 +413,6 @@ def _convert_physical(where: str, kind: str, cells: dict, raw: dict, values: dic
     """Add to ``values`` and ``errors`` the dimensionless quantities given by physical columns
     (:data:`COLUMNS`, :func:`correlations.estimate.physical_scales`); returns their names.
     ``raw``: column -> (value, rounding) of the row's numbers."""
-    from .estimate import PHYSICAL_BOUNDS, physical_scales
     physical = {c: raw[c][0] for c in _PHYSICAL_INPUTS if c in raw}
     with _Named(where, {v: k for k, v in _PHYSICAL_INPUTS.items() if v}):
         for column, bound_name in _PHYSICAL_INPUTS.items():
@@ -552,7 +559,6 @@ def _resolve_map(choice):
     """The map to read: None the shipped one, False none, a path or a SolutionMap (as the
     estimate's map rows, :mod:`correlations.registry`); the reason (:class:`_NoMap`) when there
     is none. A path that is not a map raises InvalidParameterError (``map``)."""
-    from .registry import MethodNotApplicable, resolve_solution_map
     if isinstance(choice, _NoMap):
         return choice
     if choice is False:
@@ -578,8 +584,6 @@ def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
     ``quantity``: ``V_over_U``, ``dp_plus_R0``, ``ell``, ``film_min`` or ``shape_class``;
     ``solution_map`` as in :func:`check_results`.
     """
-    from .registry import map_query, map_method_name
-    from .solution_map import outside_reason
     m = _resolve_map(solution_map)
     if isinstance(m, _NoMap):
         return str(m)
@@ -624,7 +628,6 @@ def near_critical_reference(nu: float, lam: float, quantity: str) -> Reference |
     :data:`NEAR_CRITICAL_DP_K` λ δ^(-1/2). Both error models were measured on the converged
     points of the map (0.6 ≤ ν ≤ 0.98); outside that ν range the note says so.
     """
-    from lubrication import asymptotics
     if quantity not in ("V_over_U", "dp_plus_R0"):
         return f"no near-critical law for {quantity}"
     delta = 1.0 - lam / float(critical_confinement(nu))
@@ -670,8 +673,6 @@ def small_object_reference(kind: str, lam: float, quantity: str, nu: float = 1.0
       :data:`SMALL_DROP_DP_K` λ⁵ × 4.8λ⁶, measured with our BEM for λ ≤ 0.5, Ca ≤
       :data:`SMALL_DROP_CA_MAX` (needs ``ca``).
     """
-    from lubrication import asymptotics
-    from .registry import SMALL_VESICLE_RANGE
     if quantity not in ("V_over_U", "dp_plus_R0"):
         return f"no small-object law for {quantity}"
     validity = asymptotics.SMALL_DROP_RANGE if kind == "drop" else asymptotics.SMALL_SPHERE_RANGE
@@ -708,17 +709,12 @@ def small_object_reference(kind: str, lam: float, quantity: str, nu: float = 1.0
 
 @functools.lru_cache(maxsize=256)
 def _sphere_solution(lam: float):
-    from bem.solve import solve_sphere
-
-    from .registry import guarded
     return guarded(solve_sphere, lam)
 
 
 @functools.lru_cache(maxsize=256)
 def _drop_solution(lam: float, ca: float):
-    from bem.drop import solve_drop
-
-    from .registry import guarded
+    from bem.drop import solve_drop  # lazy: scipy.linalg, only for drop rows
     return guarded(solve_drop, lam, ca)
 
 
@@ -737,7 +733,6 @@ def sphere_reference(lam: float, quantity: str, bem: bool = True) -> Reference |
         return _exact(2.0 * lam, "L/R = 2 lam")
     if not bem:
         return "BEM references skipped"
-    from bem.solve import check_sphere_inputs
     try:
         check_sphere_inputs(lam)
     except InvalidParameterError as exc:
@@ -761,7 +756,7 @@ def drop_reference(lam: float, ca: float | None, quantity: str,
         return "BEM references skipped"
     if ca is None:
         return "no ca given (the drop BEM needs the capillary number)"
-    from bem.drop import check_drop_inputs
+    from bem.drop import check_drop_inputs  # lazy: scipy.linalg, only for drop rows
     try:
         check_drop_inputs(lam, ca)
     except InvalidParameterError as exc:
@@ -893,7 +888,6 @@ def _dp_R0(row: Row) -> tuple[float, float]:
 def _bound_checks(row: Row) -> tuple[list[CheckResult], bool]:
     """The hard bounds of the module docstring; returns (checks, whether the object passes the
     tube so that references apply)."""
-    from lubrication.checks import OUTPUT_BOUNDS
     v, e, checks = row.values, row.errors, []
     lam, nu = v["lam"], v.get("nu", 1.0)
     passes = True
@@ -962,7 +956,6 @@ def chen_film_scaling_check(row: Row) -> CheckResult | str:
     Valid for 0.02 ≤ δ ≤ 0.1 (:data:`CHEN_FILM_SCALING_RANGE`) with tolerance
     :data:`CHEN_FILM_SCALING_RTOL` × the correlation (the scatter of our converged solutions).
     A vesicle row with ℓ; returns the reason (str) when it does not apply."""
-    from .pressure import dp_plus_film_chen2020
     nu, lam, ell = row.get("nu"), row.get("lam"), row.get("ell")
     if row.kind != "vesicle" or nu >= 1.0 or ell is None or ell <= 0:
         return "needs a vesicle with ell"
@@ -1026,7 +1019,6 @@ def shape_class_check(row: Row, solution_map=None) -> CheckResult | str:
     (:data:`correlations.shape.SHAPE_CLASS_RANGE_CHEN2020`): a disagreement is judged by the
     distance ν − ν_T with tolerance :data:`TRANSITION_BAND_NU` (where our map's transitions
     lie; both shapes occur near the line)."""
-    from .shape import SHAPE_CLASS_RANGE_CHEN2020, shape_class_chen2020
     given = row.get("shape_class")
     if given is None:
         return "no shape_class given"
@@ -1296,7 +1288,6 @@ def check_results(rows_or_path, *, bem: bool = True, solution_map=None) -> Check
     >>> rep.verdict.value, [c.name for c in rep.rows[0].checks][:3]
     ('pass', ['lam < lam_c', '1 <= V/U < 2', 'dp+ > 0'])
     """
-    from lubrication.io import provenance
     raw, source = read_rows(rows_or_path)
     rows = [parse_row(cells, n, where) for n, (where, cells) in enumerate(raw, 1)]
     m = _resolve_map(solution_map)

@@ -47,6 +47,7 @@ from .formatting import format_value_error
 from .registry import (BEM_DEFAULT_CA_B, LUBRICATION_DEFAULT_CA_B, MAP, MAP_DEFAULT_CA_B, METHODS,
                        QUANTITIES, SOLVER_COST, SOLVERS, Answer, MethodNotApplicable,
                        SolverNotConverged, check_output)
+from .solution_map import SolutionMap, load_map
 
 __all__ = ["RBC_DEFAULTS", "PHYSICAL_BOUNDS", "RUPTURE_TENSION_MN_M", "UNITS", "Quantity",
            "Estimate", "estimate", "estimate_dimensionless", "physical_scales"]
@@ -434,7 +435,6 @@ def _check_solvers(solvers) -> tuple:
 def _check_solution_map(choice):
     """``choice`` checked before any work: None or False as they are, a path loaded (raises
     InvalidParameterError naming ``map`` for a missing or foreign file), a map as it is."""
-    from .solution_map import SolutionMap, load_map
     if choice is None or choice is False or isinstance(choice, SolutionMap):
         return choice
     if isinstance(choice, (str, os.PathLike)):

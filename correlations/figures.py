@@ -43,7 +43,22 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from lubrication.asymptotics import (dp_plus_near_critical, dp_plus_small_sphere,
+                                     speed_near_critical, speed_slope_near_critical,
+                                     speed_small_sphere)
+from lubrication.checks import OutOfRangeWarning
 from lubrication.geometry import critical_confinement, critical_length, critical_reduced_volume
+from lubrication.io import atomic_write, clean_json, write_json
+from lubrication.plotting import plot_dp_plus_asymptotics, plot_speed_asymptotics
+
+from .film import C0_CHEN2020, film_from_capillary_chen2020
+from .plotting import plot_relative_viscosity
+from .pressure import (dp_plus_film_chen2020, dp_plus_small_sphere_coupling,
+                       dp_plus_speed_fit_chen2020)
+from .shape import transition_reduced_volume_chen2020
+from .solution_map import DEFAULT_MAP, load_map, query_map, read_points
+from .viscosity import (discharge_hematocrit_fahraeus, relative_viscosity,
+                        viscosity_single_file_chen2020)
 
 __all__ = ["FIGURES", "Statement", "FigureContext", "make_figure", "render_markdown"]
 
@@ -105,7 +120,6 @@ class FigureContext:
 
     def __init__(self, out, map_path=None, build=None, bem_max_time: float = 900.0,
                  progress=None):
-        from .solution_map import DEFAULT_MAP, load_map
         self.out = Path(out)
         self.cache = self.out / "cache"
         self.map_path = Path(map_path or DEFAULT_MAP)
@@ -129,7 +143,6 @@ class FigureContext:
     def points(self) -> list[dict]:
         """Every stored point of the build folder (read once)."""
         if self._points is None:
-            from .solution_map import read_points
             self._points = read_points(self.build) if self.build.is_dir() else []
         return self._points
 
@@ -138,7 +151,6 @@ class FigureContext:
         ``params`` and ``inputs``: what the data depend on besides the parameters, by default
         :attr:`fingerprint` (a solve gives {} or its seed). Returns (data, True if read from
         the cache)."""
-        from lubrication.io import clean_json, write_json
         inputs = self.fingerprint if inputs is None else inputs
         key = json.dumps({"what": what, "params": params, "inputs": inputs},
                          sort_keys=True, default=str)
@@ -157,7 +169,6 @@ class FigureContext:
 def _query_curves(ctx: FigureContext, nus, ratios, ca_b=CA_B) -> dict:
     """Map values of every quantity along λ/λc for each ν: {ν: {"lam_ratio", "lam", q: [...]}}
     (None where the map has no value)."""
-    from .solution_map import query_map
     out = {}
     for nu in nus:
         lam_c = float(critical_confinement(nu))
@@ -212,7 +223,7 @@ def _used_nodes(ctx, ca_b=CA_B) -> list[dict]:
 def _sampled_shape(point: dict, n: int = 201) -> tuple[list, list]:
     """(x, r) of a stored BEM shape (:meth:`bem.shape.SpectralCurve.closed` on its modes and
     density, at the point's volume 4πλ³/3), rear to front pole."""
-    from bem.shape import SpectralCurve
+    from bem.shape import SpectralCurve  # lazy: bem off the estimate's start-up
     curve = SpectralCurve.closed(point["shape"]["modes"],
                                  volume=4.0 / 3.0 * math.pi * point["lam"] ** 3,
                                  density=point["shape"]["density"])
@@ -221,7 +232,7 @@ def _sampled_shape(point: dict, n: int = 201) -> tuple[list, list]:
 
 
 def _new_figure(ncols=1, nrows=1, size=(6.4, 4.4)):
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # lazy: matplotlib
     fig = Figure(figsize=size, layout="constrained")
     return fig, fig.subplots(nrows, ncols, squeeze=False).ravel()
 
@@ -230,7 +241,6 @@ def _new_figure(ncols=1, nrows=1, size=(6.4, 4.4)):
 def _quiet():
     """Silence the out-of-range warnings of laws drawn or evaluated beyond their range on
     purpose (the comparison says where they apply)."""
-    from lubrication.checks import OutOfRangeWarning
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OutOfRangeWarning)
         yield
@@ -258,7 +268,7 @@ def _shapes_data(ctx) -> dict:
 def figure_shapes(ctx):
     """Fig. shapes2 of Chen et al. (2020): steady shapes at Ca_B = 50 for ν = 0.98, 0.9, 0.8,
     0.6 at λ/λc = 0.3 … 0.95, drawn from the stored BEM shapes of the map build (no solve)."""
-    from bem.plotting import plot_vesicle_sweep
+    from bem.plotting import plot_vesicle_sweep  # lazy: bem off the estimate's start-up
     data, cached = ctx.cached("shapes", {"nus": SHAPE_NUS, "ratios": SHAPE_RATIOS,
                                          "ca_b": CA_B}, lambda: _shapes_data(ctx))
     fig, axes = _new_figure(2, 2, (12.0, 6.0))
@@ -296,7 +306,7 @@ def figure_shapes(ctx):
 def _bem_solve(ctx, nu, lam, ca_b, initial=None, seed_name="default") -> dict:
     """One BEM vesicle solve (:func:`bem.vesicle.solve_vesicle`), as a JSON-ready dict with
     the profiles; a solve that did not converge keeps its message and no numbers."""
-    from bem.vesicle import solve_vesicle
+    from bem.vesicle import solve_vesicle  # lazy: bem and scipy off the estimate's start-up
     t0 = time.perf_counter()
     res = solve_vesicle(nu, lam=lam, ca_b=ca_b, initial=initial, max_time=ctx.bem_max_time)
     d = res.to_dict(shape=True)
@@ -321,7 +331,7 @@ def figure_shapes_cab(ctx):
                      + (" (cached)" if cached else f" in {d['seconds']:.0f} s"))
         sols.append(d)
     fig, (ax,) = _new_figure(1, 1, (8.0, 3.4))
-    from bem.plotting import draw_tube
+    from bem.plotting import draw_tube  # lazy: bem off the estimate's start-up
     half = 1.5
     for d, color in zip(sols, ("tab:blue", "tab:green", "tab:orange", "tab:red")):
         if not d["success"]:
@@ -367,7 +377,6 @@ def figure_shapes_cab(ctx):
 def _transition_on_map(ctx, nu) -> dict:
     """Where the map's rear curvature changes sign along λ at ``nu`` (Ca_B = 50): the
     bullet–parachute transition by the paper's criterion (a flat rear), and the film there."""
-    from .solution_map import query_map
     ratios = np.linspace(0.6, 0.98, 381)
     curv = [query_map(nu, r, CA_B, map=ctx.map).quantities["curvature_rear"].value
             for r in ratios]
@@ -391,7 +400,6 @@ def _class_at(ctx, nu, lam, ca) -> str:
     """The map's shape class at (ν, λ, Ca_B); where its neighbouring nodes differ (next to the
     transition) the sign of the interpolated rear-pole curvature decides, the paper's
     criterion (concave rear: parachute)."""
-    from .solution_map import query_map
     q = query_map(nu, lam / float(critical_confinement(nu)), ca, map=ctx.map).quantities
     if q["shape_class"].value is not None:
         return q["shape_class"].value
@@ -403,7 +411,6 @@ def figure_phase(ctx):
     """Fig. B-P-phase-diagram and fig. transition(a) of Chen et al. (2020): the map's shape
     classes in the (λ, ν) plane with the transition line ν_T = 1.126 − 0.29λ (eq:transition)
     and the rupture line ν_c(λ) (eq:critic2)."""
-    from .shape import transition_reduced_volume_chen2020
     data, cached = ctx.cached("phase", {"ca_b": list(ctx.map.cas)}, lambda: _phase_data(ctx))
     fig, (ax,) = _new_figure(1, 1, (6.4, 4.8))
     markers = {"5": "v", "15": "s", "50": "o", "500": "D"}
@@ -534,9 +541,6 @@ def figure_speed(ctx):
     """Fig. vel of Chen et al. (2020): V/U against λ for ν = 0.6 … 0.98 at Ca_B = 50 (map),
     with the small-sphere law (eq:small1), the near-critical asymptote (eq:asmyp1) and our
     lubrication points."""
-    from lubrication.asymptotics import (speed_near_critical, speed_slope_near_critical,
-                                         speed_small_sphere)
-    from lubrication.plotting import plot_speed_asymptotics
     fig, ax, curves, nodes, cached = _curves_plot(ctx, "V_over_U", plot_speed_asymptotics,
                                                   "V/U [-]")
     ax.set_ylim(0.95, 2.05)
@@ -575,8 +579,6 @@ def figure_speed(ctx):
 def figure_pressure(ctx):
     """Fig. dpa of Chen et al. (2020): Δp⁺R0/(ηU) against λ (map, Ca_B = 50) with eq:small2,
     eq:asmyp2 and our lubrication points."""
-    from lubrication.asymptotics import dp_plus_near_critical, dp_plus_small_sphere
-    from lubrication.plotting import plot_dp_plus_asymptotics
     fig, ax, curves, nodes, cached = _curves_plot(ctx, "dp_plus_R0", plot_dp_plus_asymptotics,
                                                   "Δp⁺R0/(ηU) [-]")
     rows, devs = _small_sphere_rows("pressure", nodes, "dp_plus_R0", dp_plus_small_sphere,
@@ -668,7 +670,6 @@ def _film_points(ctx) -> list[dict]:
 def figure_film_ca(ctx):
     """Fig. film_Ca of Chen et al. (2020): smallest gap against Ca_v = ηV/γ_F with
     δ = c0 Ca_v^(2/3) (eq:sfilm4, c0 = 2 and Secomb's 2.123)."""
-    from .film import C0_CHEN2020, film_from_capillary_chen2020
     pts, cached = ctx.cached("film_ca", {"ca_b": CA_B, "lam_ratio_min": 0.5},
                              lambda: _film_points(ctx))
     fig, (ax,) = _new_figure(1, 1, (6.4, 4.8))
@@ -726,8 +727,6 @@ def figure_dp_scalings(ctx):
     """Figs. dpa_film and dpa_v of Chen et al. (2020): Δp⁺R0/(ηU) against α = λℓ/δ with
     (3/2)α, and against U/V with the small-sphere coupling (eq:dpa_v) and the ν = 0.6 fit
     (eq:dpa_v_fit)."""
-    from .pressure import (dp_plus_film_chen2020, dp_plus_small_sphere_coupling,
-                           dp_plus_speed_fit_chen2020)
     curves, c1 = _map_curves(ctx)
     nodes, c2 = ctx.cached("nodes", {"ca_b": CA_B}, lambda: _used_nodes(ctx))
     cached = c1 and c2
@@ -792,7 +791,8 @@ def figure_dp_scalings(ctx):
 # --------------------------------------------------------------------------- tension
 
 def _lubrication_tension(nu, lam) -> dict:
-    from lubrication.solve import solve_lubrication
+    from lubrication.solve import (  # lazy: scipy.integrate off the estimate's start-up
+        solve_lubrication)
     res = solve_lubrication(nu, lam, ca_b=CA_B)
     d = res.to_dict()
     d["provenance"] = None
@@ -811,7 +811,7 @@ def _nearest_stored(ctx, nu, lam_ratio, ca_b):
 
 def _bem_tension(ctx, nu, lam, p):
     """One BEM solve at (ν, λ) started from the stored point ``p``'s shape."""
-    from bem.shape import SpectralCurve
+    from bem.shape import SpectralCurve  # lazy: bem off the estimate's start-up
     curve = SpectralCurve.closed(p["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
                                  density=p["shape"]["density"])
     return _bem_solve(ctx, nu, lam, CA_B, initial=curve,
@@ -902,12 +902,6 @@ def figure_viscosity(ctx):
     (Chen §Visco) with the map's Δp⁺ (ν = 0.6, R0 = 2.8 µm, Ca_B = 50) and with eq:asmyp2,
     and the Pries et al. 1992 in-vitro law (at H_D = 0.45 and at the H_D of H_T = 0.45 by the
     Fåhræus relation)."""
-    from lubrication.asymptotics import dp_plus_near_critical
-
-    from .plotting import plot_relative_viscosity
-    from .solution_map import query_map
-    from .viscosity import (discharge_hematocrit_fahraeus, relative_viscosity,
-                            viscosity_single_file_chen2020)
     h_t, nu = 0.45, 0.6
     lam_c = float(critical_confinement(nu))
     d_c = 2.0 * R0_RBC_UM / lam_c
@@ -1007,7 +1001,6 @@ FIGURES = {
 def make_figure(ctx: FigureContext, name: str, fmt: str = "png") -> dict:
     """Draw figure ``name`` into ``<out>/<name>.<fmt>`` (atomically) and return its record:
     name, caption, file, whether every part came from the cache, seconds, statements."""
-    from lubrication.io import atomic_write
     t0 = time.perf_counter()
     fig, rows, cached = FIGURES[name][1](ctx)
     path = ctx.out / f"{name}.{fmt}"

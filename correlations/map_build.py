@@ -47,15 +47,22 @@ import datetime
 import json
 import logging
 import math
+import multiprocessing
 import os
 import signal
+import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from lubrication.checks import InvalidParameterError, check_range
+from lubrication.geometry import critical_confinement
 from lubrication.io import provenance as run_provenance
 from lubrication.io import write_json
 from lubrication.results import Status, leading_status
+from lubrication.solve import solve_lubrication
+from bem import vesicle   # its solve_vesicle read at call time (tests patch it)
+from bem.shape import SpectralCurve
 
 from .solution_map import POINT_FORMAT, QUANTITIES, pack_map, point_filename, read_points
 
@@ -161,9 +168,6 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     The point's status is CONVERGED if a start converged, else the leading status of the failed
     starts (:func:`lubrication.results.leading_status`). Returns (record fields, the warm start
     of the next point or None)."""
-    from bem.shape import SpectralCurve
-    from bem.vesicle import NEAR_CRITICAL, solve_vesicle
-    from lubrication.geometry import critical_confinement
 
     def neighbour():
         lam = lam_ratio * float(critical_confinement(nu))
@@ -173,7 +177,7 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     starts = [("own", lambda: None)]
     if warm is not None:
         label = f"neighbour (nu={warm['nu']:g}, lam/lam_c={warm['lam_ratio']:g})"
-        starts.insert(0 if lam_ratio <= NEAR_CRITICAL else 1, (label, neighbour))
+        starts.insert(0 if lam_ratio <= vesicle.NEAR_CRITICAL else 1, (label, neighbour))
     deadline = None if max_time is None else time.monotonic() + max_time
     failures, found, bie, res = [], [], 0, None
     for label, make_initial in starts:
@@ -185,8 +189,8 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
         initial = None
         try:
             initial = make_initial()
-            res = solve_vesicle(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial,
-                                max_time=left, **options)
+            res = vesicle.solve_vesicle(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial,
+                                        max_time=left, **options)
         except InvalidParameterError as exc:
             if initial is None and label == "own":
                 raise
@@ -227,8 +231,6 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
 def _solve_lubrication(nu, lam_ratio, ca_b, warm, options, max_time):
     """One lubrication point (bending model at ``ca_b``). ``warm``: a LubricationResult or
     None (stored records hold no solver state: cold start)."""
-    from lubrication.solve import solve_lubrication
-
     initial = None if isinstance(warm, dict) else warm
     try:
         res = solve_lubrication(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial,
@@ -303,7 +305,7 @@ def _share_cores(threads: int | None) -> None:
     ``bench_map_build.py`` (2 cores, 8 BEM points, one run each): 2 pool workers of 2 threads
     13.3 s, of 1 thread 12.3 s; a Dask LocalCluster of 2 processes 15.1 s and 13.6 s."""
     if threads:
-        import numba
+        import numba  # lazy: numba
 
         numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
 
@@ -346,7 +348,7 @@ def solve_line(folder, method, ca_b, points, stored, options, max_time, provenan
 def _connect(scheduler: str):
     """A Dask client of the scheduler at ``scheduler``; InvalidParameterError if unreachable."""
     try:
-        from dask.distributed import Client
+        from dask.distributed import Client  # lazy: dask.distributed, optional, for --scheduler
     except ImportError:
         raise InvalidParameterError("scheduler", scheduler, "the address of a Dask scheduler",
                                     "dask.distributed is not installed (pip install "
@@ -529,8 +531,6 @@ def _pool_context():
     spawn once this process has started numba's parallel threading layer (a BEM solve in the
     same process): forking after GNU OpenMP has started aborts the workers ("fork() called
     from a process already using GNU OpenMP")."""
-    import multiprocessing
-    import sys
     numba = sys.modules.get("numba")
     if numba is not None:
         try:
@@ -546,7 +546,6 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
     progress; Ctrl-C stops the workers and propagates."""
     executor = None
     if client is None:
-        from concurrent.futures import ProcessPoolExecutor
         cores = os.cpu_count() or 1
         n = min(workers or cores, max(len(jobs), 1))
         executor = ProcessPoolExecutor(n, mp_context=_pool_context(),

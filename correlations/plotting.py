@@ -4,9 +4,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from lubrication.geometry import critical_confinement
+from lubrication.plotting import plot_dp_plus_asymptotics, plot_speed_asymptotics
+
 from .viscosity import VISCOSITY_LAWS, relative_viscosity
 
 __all__ = ["plot_relative_viscosity", "plot_estimate", "plot_check"]
+
+
+def _figure(**kwargs):
+    """A new headless :class:`matplotlib.figure.Figure` (no pyplot)."""
+    from matplotlib.figure import Figure  # lazy: matplotlib
+    return Figure(**kwargs)
 
 
 def plot_relative_viscosity(diameters_um=None, hematocrits=(0.2, 0.45), laws=VISCOSITY_LAWS,
@@ -38,8 +47,7 @@ def plot_relative_viscosity(diameters_um=None, hematocrits=(0.2, 0.45), laws=VIS
     2
     """
     if ax is None:
-        from matplotlib.figure import Figure   # lazy: importing this module needs no matplotlib
-        ax = Figure(figsize=(6.0, 4.0)).add_subplot()
+        ax = _figure(figsize=(6.0, 4.0)).add_subplot()
     d = np.geomspace(3.3, 1978.0, 400) if diameters_um is None else np.asarray(diameters_um,
                                                                                  dtype=float)
     for law in laws:
@@ -78,10 +86,8 @@ def plot_estimate(est, ax=None):
     >>> len(ax.figure.axes)
     2
     """
-    from lubrication.plotting import plot_dp_plus_asymptotics, plot_speed_asymptotics
     if ax is None:
-        from matplotlib.figure import Figure
-        ax = Figure(figsize=(10.0, 4.0)).subplots(1, 2)
+        ax = _figure(figsize=(10.0, 4.0)).subplots(1, 2)
     nu, lam = est["nu"], est["lam"]
     plot_speed_asymptotics(nu=(nu,), ax=ax[0])
     plot_dp_plus_asymptotics(nu=(nu,), ax=ax[1])
@@ -126,12 +132,10 @@ def plot_check(report, ax=None):
     >>> len(plot_check(rep).figure.axes)
     2
     """
-    from lubrication.geometry import critical_confinement
-
-    from .check import DEFAULT_CA_B, map_reference
+    from .check import (  # lazy: correlations.check off the estimate's start-up
+        DEFAULT_CA_B, map_reference)
     if ax is None:
-        from matplotlib.figure import Figure
-        ax = Figure(figsize=(11.0, 4.5)).subplots(1, 2)
+        ax = _figure(figsize=(11.0, 4.5)).subplots(1, 2)
     colours = {"pass": "C2", "warn": "C1", "fail": "C3"}
     series = sorted({(r.row.get("nu"), r.row.get("ca_b", DEFAULT_CA_B)) for r in report.rows
                      if r.row.kind == "vesicle" and r.row.get("nu") < 1.0})[:6]

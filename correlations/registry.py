@@ -104,6 +104,7 @@ from lubrication import asymptotics
 from lubrication.checks import OUTPUT_BOUNDS, ValidityRange, check_output
 
 from . import film, pressure, shape, viscosity
+from . import solution_map as sm   # its attributes read at call time (tests patch query_map)
 
 __all__ = ["Answer", "BEM_RANGE", "MAP", "MAP_DEFAULT_CA_B", "Method", "MethodNotApplicable",
            "METHODS", "OUTPUT_BOUNDS", "QUANTITIES", "SOLVERS", "SOLVER_COST",
@@ -233,7 +234,8 @@ def guarded(solve, *args, **kwargs):
 
 @functools.lru_cache(maxsize=16)
 def _lubrication_solution(nu: float, lam: float, ca_b: float):
-    from lubrication.solve import solve_lubrication
+    from lubrication.solve import (  # lazy: scipy.integrate off the estimate's start-up
+        solve_lubrication)
     return guarded(solve_lubrication, nu, lam, ca_b=ca_b)
 
 
@@ -255,7 +257,7 @@ BEM_DEFAULT_CA_B = 50.0
 def _bem_result(nu: float, lam: float, ca_b: float):
     """One :func:`bem.vesicle.solve_vesicle` per (nu, lam, Ca_B) to BEM_TOLERANCES, converged
     or not (minutes)."""
-    from bem import vesicle  # lazy: numba loads only when the BEM is enabled
+    from bem import vesicle  # lazy: bem and scipy off the estimate's start-up
     return guarded(vesicle.solve_vesicle, nu, lam, ca_b=ca_b, **BEM_TOLERANCES)
 
 
@@ -320,19 +322,17 @@ _MAP_SOURCE = ("solution map (correlations.solution_map): stored BEM and lubrica
 def resolve_solution_map(choice):
     """The map the rows read: ``choice`` None for the shipped map (the rows have no value when
     none is shipped), or a path or :class:`~correlations.solution_map.SolutionMap`."""
-    from .solution_map import DEFAULT_MAP, SolutionMap, load_map
-    if isinstance(choice, SolutionMap):
+    if isinstance(choice, sm.SolutionMap):
         return choice
-    if choice is None and not DEFAULT_MAP.exists():
-        raise MethodNotApplicable(f"no solution map shipped ({DEFAULT_MAP} absent)")
-    return load_map(choice)
+    if choice is None and not sm.DEFAULT_MAP.exists():
+        raise MethodNotApplicable(f"no solution map shipped ({sm.DEFAULT_MAP} absent)")
+    return sm.load_map(choice)
 
 
 @functools.lru_cache(maxsize=32)
 def map_query(nu: float, lam_ratio: float, ca_b: float, solution_map):
     """One :func:`~correlations.solution_map.query_map` per case and map: serves every map row."""
-    from .solution_map import query_map
-    return query_map(nu, lam_ratio, ca_b, solution_map)
+    return sm.query_map(nu, lam_ratio, ca_b, solution_map)
 
 
 def map_method_name(methods) -> str:

@@ -117,6 +117,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from lubrication.checks import CannotPassError, InvalidParameterError, as_finite, check_positive
+from lubrication.io import atomic_write, clean_json
 from lubrication.results import status_of
 
 __all__ = ["FORMAT", "POINT_FORMAT", "QUANTITIES", "TRANSFORMS", "DEFAULT_MAP", "CA_B_CLAMP_MAX",
@@ -800,7 +801,6 @@ def pack_map(folder, out=None) -> Path:
     shapes), ``holes`` (failed or missing grid points with their reasons) and the LOO errors
     ``loo_<axis>_<q>`` (see the module docstring).
     """
-    from lubrication.io import atomic_write, clean_json
     folder = Path(folder)
     try:
         build = json.loads((folder / "build.json").read_text(encoding="utf-8"))

@@ -33,6 +33,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+import lubrication   # the package's __version__, read at call time (no import-order dependency)
+
 __all__ = ["atomic_write", "clean_json", "forget_written_files", "provenance", "save_json",
            "save_result", "write_json", "written_files"]
 
@@ -174,9 +176,7 @@ def provenance() -> dict:
     >>> {"vesicle-tube", "python", "numpy", "git_commit", "date"} <= set(provenance())
     True
     """
-    from . import __version__
-
-    out = {"vesicle-tube": __version__, "python": platform.python_version()}
+    out = {"vesicle-tube": lubrication.__version__, "python": platform.python_version()}
     for name in ("numpy", "scipy", "numba"):
         version = getattr(sys.modules.get(name), "__version__", None)
         if version is not None:

@@ -21,11 +21,14 @@ __all__ = ["plot_speed_asymptotics", "plot_dp_plus_asymptotics", "plot_shape", "
 _LAM_LABEL = "λ = R0/R [-]"
 
 
+def _figure(**kwargs):
+    """A new headless :class:`matplotlib.figure.Figure` (no pyplot)."""
+    from matplotlib.figure import Figure  # lazy: matplotlib
+    return Figure(**kwargs)
+
+
 def _new_axes(ax):
-    if ax is None:
-        from matplotlib.figure import Figure   # lazy: importing the package needs no matplotlib
-        ax = Figure().add_subplot()
-    return ax
+    return _figure().add_subplot() if ax is None else ax
 
 
 def _draw(ax, nu, law, ylabel, log):
@@ -164,8 +167,7 @@ def plot_sweep(results, axes=None):
         The first of the four panels (``ax.figure`` holds all).
     """
     if axes is None:
-        from matplotlib.figure import Figure
-        axes = Figure(figsize=(10, 7)).subplots(2, 2).ravel()
+        axes = _figure(figsize=(10, 7)).subplots(2, 2).ravel()
     ok = [r for r in results if r.success]
     lam = np.array([r.lam for r in ok])
     nu, lam_c = results[0].nu, results[0].lam_c

@@ -74,6 +74,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid, solve_bvp
+from tqdm.auto import tqdm
 
 from .checks import CannotPassError, Deadline, InvalidParameterError, check_range
 from .equations import (BENDING_STATE, HIGH_CA_STATE, gap_flow, capillary_number, rhs_bending,
@@ -949,7 +950,6 @@ def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
     max_step = float(check_range("max_step", max_step, 1e-4, 0.5))
     # the lowest ratio carries the model's range check (its message names the value)
     base = _check_inputs(nu, None, float(ratios.min()), ca_b, tol, max_nodes, max_time)
-    from tqdm.auto import tqdm
     results: list[LubricationResult | None] = [None] * ratios.size
     # the bar is closed on any exit (Ctrl-C included), so that it is not redrawn after the
     # command line's last message

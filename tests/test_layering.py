@@ -4,7 +4,8 @@
   ``sys.exit`` (the command line is ``correlations.cli``);
 * no module of the three packages imports another module's private (underscored) name: what
   two modules share is public;
-* ``lubrication`` imports neither ``bem`` nor ``correlations``, ``bem`` not ``correlations``.
+* ``lubrication`` imports neither ``bem`` nor ``correlations``, ``bem`` not ``correlations``;
+* an import inside a function says why it is not at module level (``# lazy: <reason>``).
 """
 
 import ast
@@ -64,3 +65,28 @@ def test_dependencies_point_one_way(package, forbidden):
     found = [f"{path}: {module}" for path, tree in _modules(package)
              for module, _ in _imported(tree) if module.split(".")[0] in forbidden]
     assert not found, found
+
+
+def _function_imports(node, in_function=False):
+    """Every import statement inside a function body (nested functions included)."""
+    for child in ast.iter_child_nodes(node):
+        if in_function and isinstance(child, (ast.Import, ast.ImportFrom)):
+            yield child
+        yield from _function_imports(
+            child, in_function or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)))
+
+
+def test_every_import_inside_a_function_says_why():
+    """Imports are at module level, except those that keep a heavy module (numba, matplotlib,
+    dask, a scipy submodule, a library the command does not need) off a fast path
+    (``vesicle-tube estimate``'s start-up, the input checks before numba, ``import bem``): each
+    of those says why on its first line, ``# lazy: <reason>``."""
+    found = []
+    for path, tree in _modules(*PACKAGES):
+        lines = (ROOT / path).read_text().splitlines()
+        for node in _function_imports(tree):
+            line = lines[node.lineno - 1]
+            if "# lazy:" in line:
+                continue
+            found.append(f"{path}:{node.lineno}: {line.strip()}")
+    assert not found, "imports inside functions without '# lazy: <reason>':\n" + "\n".join(found)

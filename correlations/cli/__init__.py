@@ -15,8 +15,13 @@ import argparse
 import sys
 import warnings
 
+from lubrication import geometry
 from lubrication.checks import (InvalidParameterError, OutOfRangeWarning, check_fraction,
-                                check_positive, check_range)
+                                check_output, check_positive, check_range)
+from lubrication.io import forget_written_files, written_files
+from correlations import viscosity
+from correlations.cli.bem import add_bem_parser
+from correlations.cli.check import add_check_parser
 from correlations.cli.contract import (EXIT_CHECK_FAILED, EXIT_INTERRUPTED, EXIT_INVALID,
                                       EXIT_NOT_CONVERGED, EXIT_OK,
                                       Parser, UsageError, check_output_dir, check_plot_path,
@@ -25,6 +30,13 @@ from correlations.cli.contract import (EXIT_CHECK_FAILED, EXIT_INTERRUPTED, EXIT
                                       interrupted_message, is_interrupt,
                                       non_finite_keys, one_line, options_named,
                                       quiet_broken_pipe, save_plot)
+from correlations.cli.figures import add_figures_parser
+from correlations.cli.infer import add_infer_parser
+from correlations.cli.lubrication import add_parser as add_lubrication_parser
+from correlations.cli.map import add_map_parser
+from correlations.estimate import PHYSICAL_BOUNDS, RBC_DEFAULTS, estimate, estimate_dimensionless
+from correlations.plotting import plot_estimate, plot_relative_viscosity
+from correlations.registry import QUANTITIES, SOLVERS
 
 # Human labels of the output keys (key -> label); keys not listed are printed as they are. A
 # label names the quantity; the "unit" column says what its value is measured in (below).
@@ -99,16 +111,12 @@ def _quantity_rows(quantities: dict, keys) -> list:
 def _unphysical(quantity: str, value) -> str:
     """Why ``value`` may not be reported as ``quantity`` ("" if it may): the output checks of
     :func:`lubrication.checks.check_output` (finite, within the physical bounds)."""
-    from lubrication.checks import check_output
     return check_output(quantity, value, {}) if value is not None else ""
 
 
 # --------------------------------------------------------------------------- commands
 
 def cmd_geometry(args) -> dict:
-    from lubrication import geometry as g
-
-    from correlations.estimate import PHYSICAL_BOUNDS
     if args.nu is not None and (args.volume_fl is not None or args.area_um2 is not None):
         raise UsageError("give either --nu or --volume-fl/--area-um2, not both")
     with _options(args):
@@ -120,25 +128,25 @@ def cmd_geometry(args) -> dict:
                 if value is not None:
                     lo, hi, reason = PHYSICAL_BOUNDS[name]
                     check_range(name, check_positive(name, value), lo, hi, reason=reason)
-            nu, R0 = g.cell_from_volume_area(args.volume_fl, args.area_um2)
+            nu, R0 = geometry.cell_from_volume_area(args.volume_fl, args.area_um2)
             lam = (None if args.diameter_um is None
-                   else g.confinement_from_diameter(R0, args.diameter_um))
+                   else geometry.confinement_from_diameter(R0, args.diameter_um))
         else:
-            nu, R0 = float(g.check_reduced_volume(args.nu)), None
+            nu, R0 = float(geometry.check_reduced_volume(args.nu)), None
             if args.diameter_um is not None:
                 raise UsageError("--diameter-um goes with --volume-fl/--area-um2; use --lam with --nu")
             lam = None if args.lam is None else float(check_positive("lam", args.lam))
-        lam_c, ell_c = g.critical_confinement(nu), g.critical_length(nu)
+        lam_c, ell_c = geometry.critical_confinement(nu), geometry.critical_length(nu)
     out = {"command": "geometry", "converged": True, "nu": nu, "lam_c": lam_c, "ell_c": ell_c,
-           "reduced_area_excess": g.reduced_area_excess(nu)}
+           "reduced_area_excess": geometry.reduced_area_excess(nu)}
     if R0 is not None:
-        out.update(R0_um=R0, d_c_um=g.critical_diameter_um(nu, R0),
-                   L_c_um=g.critical_length_um(nu, R0))
+        out.update(R0_um=R0, d_c_um=geometry.critical_diameter_um(nu, R0),
+                   L_c_um=geometry.critical_length_um(nu, R0))
     if lam is not None:
         passes = bool(lam < lam_c)
         out.update(lam=lam, passes=passes, delta=(1.0 - lam / lam_c) if passes else None)
         if lam >= 1.0:
-            out["nu_c"] = g.critical_reduced_volume(lam)
+            out["nu_c"] = geometry.critical_reduced_volume(lam)
     units = {"R0_um": "um", "d_c_um": "um", "L_c_um": "um", "ell_c": "R_c", "passes": ""}
     inputs = {"nu", "lam"} if R0 is None else set()
     rows = [(LABELS.get(k, k), v, units.get(k, "-"),
@@ -148,7 +156,6 @@ def cmd_geometry(args) -> dict:
 
 
 def cmd_estimate(args) -> dict:
-    from correlations.estimate import estimate, estimate_dimensionless
     physical = any(getattr(args, k) is not None for k in
                    ("volume_fl", "area_um2", "diameter_um", "velocity_mm_s",
                     "plasma_viscosity_mpas", "bending_modulus_j"))
@@ -178,7 +185,6 @@ def cmd_estimate(args) -> dict:
                  f"{i['diameter_um']:g} um tube; U = {i['velocity_mm_s']:g} mm/s, eta = "
                  f"{i['plasma_viscosity_mpas']:g} mPa s, kappa = {i['bending_modulus_j']:g} J")
     out = est.to_dict()
-    from correlations.registry import QUANTITIES
     why = [f"  {k}: {est.quantities[k].note}" for k in QUANTITIES
            if est.quantities[k].value is None and est.quantities[k].note.startswith("no valid")]
     human = "\n".join([format_rows(_quantity_rows(est.quantities, ESTIMATE_ROWS), title),
@@ -187,13 +193,11 @@ def cmd_estimate(args) -> dict:
                       (["why no value:"] + why if why else []) +
                       ["methods and validity ranges: correlations/registry.py, docs/user-guide.md"])
     if args.plot:
-        from correlations.plotting import plot_estimate
         save_plot(plot_estimate(est), args.plot)
     return out, human
 
 
 def cmd_viscosity(args) -> dict:
-    from correlations import viscosity as v
     law = args.law
     d, h, kind = args.diameter_um, args.hematocrit, args.hematocrit_kind
     if law == "single-file":
@@ -203,17 +207,17 @@ def cmd_viscosity(args) -> dict:
         d = float(check_positive("diameter_um", d))
         if kind == "tube":      # H_D is needed by the law: an unphysical conversion is an error
             h_t = float(check_fraction("tube_hematocrit", h))
-            h_d = v.discharge_hematocrit_fahraeus(d, h_t, constants=args.constants)
+            h_d = viscosity.discharge_hematocrit_fahraeus(d, h_t, constants=args.constants)
         else:                   # H_T is only reported: where the fit is unphysical it is missing
             h_d = float(check_fraction("discharge_hematocrit", h))
             h_t = None
-            if d > v.FAHRAEUS_MIN_DIAMETER_UM[args.constants]:
-                h_t = v.tube_hematocrit_fahraeus(d, h_d, constants=args.constants)
+            if d > viscosity.FAHRAEUS_MIN_DIAMETER_UM[args.constants]:
+                h_t = viscosity.tube_hematocrit_fahraeus(d, h_d, constants=args.constants)
             else:
                 notes.append(f"no tube hematocrit: below d = "
-                             f"{v.FAHRAEUS_MIN_DIAMETER_UM[args.constants]:.4g} um the "
+                             f"{viscosity.FAHRAEUS_MIN_DIAMETER_UM[args.constants]:.4g} um the "
                              f"{args.constants} Fahraeus fit gives H_T > H_D, which is impossible")
-        eta = v.relative_viscosity(d, h_d, law=law)
+        eta = viscosity.relative_viscosity(d, h_d, law=law)
     problem = _unphysical("eta_rel", eta)
     if problem:
         notes.append(f"no eta_rel: {problem}")
@@ -231,7 +235,6 @@ def cmd_viscosity(args) -> dict:
              "" if h_t is not None else "Fahraeus fit not meaningful here"),
             (LABELS["eta_rel"], eta, "-", law, "" if eta is not None else "rejected")]
     if args.plot:
-        from correlations.plotting import plot_relative_viscosity
         save_plot(plot_relative_viscosity(hematocrits=(h_d,)), args.plot)
     return out, format_rows(rows, f"Relative apparent viscosity ({law})") + "\n" + UNIT_CONVENTION
 
@@ -243,8 +246,6 @@ def _single_file_viscosity(args) -> dict:
     reason (or a flagged extrapolation with --extrapolate), never another law's number. The
     law's diameter range is its stored validity range, viscosity.CHEN2020_RANGE.
     """
-    from correlations.estimate import estimate
-    from correlations.viscosity import CHEN2020_RANGE, viscosity_single_file_chen2020
     with _options(args):
         est = estimate(diameter_um=args.diameter_um, hematocrit=args.hematocrit,
                        hematocrit_kind=args.hematocrit_kind, extrapolate=args.extrapolate)
@@ -256,22 +257,24 @@ def _single_file_viscosity(args) -> dict:
         note = f"no tube hematocrit: {h_t.note}"
     else:
         with _options(args):
-            eta = viscosity_single_file_chen2020(dp.value, args.diameter_um, est["R0_um"], h_t.value)
+            eta = viscosity.viscosity_single_file_chen2020(dp.value, args.diameter_um,
+                                                           est["R0_um"], h_t.value)
         problem = _unphysical("eta_rel", eta)
         if problem:
             eta, note = None, f"no eta_rel: {problem}"
-    in_range = CHEN2020_RANGE.contains(diameter_um=args.diameter_um)
+    in_range = viscosity.CHEN2020_RANGE.contains(diameter_um=args.diameter_um)
     valid = eta is not None and dp.valid and h_t.valid and in_range
     out = {"command": "viscosity", "converged": True, "law": "single-file (Chen et al. 2020 §IV.D)",
            "diameter_um": args.diameter_um, "eta_rel": eta, "valid": valid,
            "tube_hematocrit": h_t.value, "discharge_hematocrit": est["discharge_hematocrit"],
            "dp_plus_R0": dp.value, "dp_plus_method": dp.method, "note": note,
-           "validity": CHEN2020_RANGE.describe(), "cell": "RBC defaults (90 fL, 135 um^2)"}
+           "validity": viscosity.CHEN2020_RANGE.describe(),
+           "cell": "RBC defaults (90 fL, 135 um^2)"}
     if note:
         out["warnings"] = [note]
     elif eta is not None and not in_range:
         out["warnings"] = [f"single-file law used at diameter_um={args.diameter_um:g}, outside "
-                           f"{CHEN2020_RANGE.describe()}; the value is extrapolated"]
+                           f"{viscosity.CHEN2020_RANGE.describe()}; the value is extrapolated"]
     rows = [("law", out["law"], "", "", ""),
             (LABELS["diameter_um"], args.diameter_um, "um", "input", ""),
             *_quantity_rows(est.quantities, ("tube_hematocrit", "discharge_hematocrit", "dp_plus_R0")),
@@ -282,7 +285,6 @@ def _single_file_viscosity(args) -> dict:
 
 
 def cmd_fahraeus(args) -> dict:
-    from correlations import viscosity as v
     d = args.diameter_um
     if (args.discharge_hematocrit is None) == (args.tube_hematocrit is None):
         raise UsageError("give exactly one of --discharge-hematocrit H, --tube-hematocrit H")
@@ -290,12 +292,12 @@ def cmd_fahraeus(args) -> dict:
                   tube_hematocrit="--tube-hematocrit"):
         if args.discharge_hematocrit is not None:
             h_d = args.discharge_hematocrit
-            h_t = v.tube_hematocrit_fahraeus(d, h_d, constants=args.constants)
+            h_t = viscosity.tube_hematocrit_fahraeus(d, h_d, constants=args.constants)
         else:
             h_t = args.tube_hematocrit
-            h_d = v.discharge_hematocrit_fahraeus(d, h_t, constants=args.constants)
+            h_d = viscosity.discharge_hematocrit_fahraeus(d, h_t, constants=args.constants)
         # the ratio from the fit itself (exact even for tiny hematocrits), always <= 1
-        ratio = v.hematocrit_ratio_fahraeus(d, h_d, constants=args.constants)
+        ratio = viscosity.hematocrit_ratio_fahraeus(d, h_d, constants=args.constants)
     out = {"command": "fahraeus", "converged": True, "constants": args.constants, "diameter_um": d,
            "discharge_hematocrit": h_d, "tube_hematocrit": h_t, "ratio_HT_over_HD": ratio}
     method = f"Fahraeus ({args.constants})"
@@ -311,8 +313,6 @@ def cmd_fahraeus(args) -> dict:
 # --------------------------------------------------------------------------- parser
 
 def build_parser() -> argparse.ArgumentParser:
-    from correlations.estimate import PHYSICAL_BOUNDS, RBC_DEFAULTS
-    from correlations.registry import SOLVERS
     p = Parser(prog="vesicle-tube", description="Vesicles and red blood cells in narrow tubes "
                 "(Stokes flow): geometry, engineering estimates, apparent viscosity.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
@@ -396,14 +396,10 @@ def build_parser() -> argparse.ArgumentParser:
     common(f)
     f.set_defaults(func=cmd_fahraeus)
 
-    from correlations.cli.lubrication import add_parser as add_lubrication   # light: solvers load on use
-    add_lubrication(sub)
-    from correlations.cli.bem import add_bem_parser                          # light: numba loads on use
-    add_bem_parser(sub)
-    from correlations.cli.map import add_map_parser; add_map_parser(sub)   # light: solvers load on use
-    from correlations.cli.check import add_check_parser; add_check_parser(sub)   # light: loads on use
-    from correlations.cli.infer import add_infer_parser; add_infer_parser(sub)   # light: loads on use
-    from correlations.cli.figures import add_figures_parser; add_figures_parser(sub)   # light: loads on use
+    # each command module is light: its solvers load inside its commands
+    for add in (add_lubrication_parser, add_bem_parser, add_map_parser, add_check_parser,
+                add_infer_parser, add_figures_parser):
+        add(sub)
     return p
 
 
@@ -432,7 +428,6 @@ def _unphysical_flags(out: dict) -> list[str]:
     """Every reported number outside the bounds the physics sets, at the top level of the
     result and in its sweep ``points``: flagged, never silent (a model used beyond its meaning,
     e.g. the lubrication model for a short vesicle)."""
-    from lubrication.checks import check_output
     flags = []
     points = out.get("points")
     rows = [("", out)] + [(f"point {i + 1}: ", p) for i, p in
@@ -450,7 +445,6 @@ def _unphysical_flags(out: dict) -> list[str]:
 
 def _run(args) -> int:
     """Run the command of ``args`` under the contract of :mod:`correlations.cli.contract`."""
-    from lubrication.io import forget_written_files, written_files
     prog = _prog(args)
     forget_written_files()
     with warnings.catch_warnings(record=True) as caught:

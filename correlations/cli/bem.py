@@ -4,9 +4,10 @@ Registered by :func:`correlations.cli.build_parser` through :func:`add_bem_parse
 is the one of :mod:`correlations.cli.contract` (table for people, one JSON object with ``--json``, exit
 0 / 2 invalid input with one line on stderr / 1 not converged with the JSON still printed and
 ``"converged": false``). Whether a solve converged is read from its status
-(:class:`lubrication.results.Status`), written as ``"status"`` beside ``"converged"``. This
-module imports only the standard library at import time: numba, numpy and matplotlib load
-inside the command functions, so that ``vesicle-tube estimate`` stays fast.
+(:class:`lubrication.results.Status`), written as ``"status"`` beside ``"converged"``. The
+``bem`` package loads inside the command functions (and with it scipy, numba at the first solve
+and matplotlib for a plot), so that ``vesicle-tube estimate``, which registers these commands,
+stays fast.
 
 Units: R = 1, U the mean velocity, eta the viscosity; lam = a/R (sphere) or R0/R (drop, R0 the
 radius of the sphere of equal volume), Ca = eta U / gamma. In the tables the "unit" column
@@ -26,7 +27,13 @@ import logging
 import math
 import sys
 
+import numpy as np
+
 from lubrication.io import clean_json
+from lubrication.results import Status
+from correlations.cli.contract import (Parser, UsageError, add_max_time_option, finite_float,
+                                      format_rows, format_value, options_named, positive_int,
+                                      save_plot)
 
 __all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere", "cmd_bem_vesicle",
            "cmd_bem_vesicle_sweep"]
@@ -42,21 +49,17 @@ _OPTIONS = {"lam": "--lam", "lam_ratio": "--lam-ratio", "lams": "--lam", "lam_ra
 
 def _options_named():
     """Input-check errors name the option (:func:`correlations.cli.contract.options_named`)."""
-    from correlations.cli.contract import options_named
     return options_named(_OPTIONS)
 
 
 def _converged(res) -> bool:
     """Whether a solve converged, from its status."""
-    from lubrication.results import Status
     return res.status is Status.CONVERGED
 
 
 def cmd_bem_sphere(args):
     """Free rigid sphere of radius lam R on the axis of Poiseuille flow."""
-    from correlations.cli.contract import format_rows
-
-    from bem.solve import solve_sphere
+    from bem.solve import solve_sphere  # lazy: bem off the estimate's start-up
     with _options_named():           # the solver checks its inputs before any BEM work
         res = solve_sphere(args.lam, panels=args.panels, tol=args.tol, max_time=args.max_time)
     ok = _converged(res)
@@ -99,9 +102,7 @@ def _shape_result_json(res, subcommand: str, args) -> dict:
 def _plot_shape(res, args) -> None:
     """--plot FILE: the body's shape in the tube."""
     if args.plot:
-        from correlations.cli.contract import save_plot
-
-        from bem.plotting import plot_shape
+        from bem.plotting import plot_shape  # lazy: bem off the estimate's start-up
         save_plot(plot_shape(res), args.plot)
 
 
@@ -119,9 +120,7 @@ def _method_and_error(res):
 
 def cmd_bem_drop(args):
     """Steady clean drop (viscosity ratio 1, constant tension) on the axis."""
-    from correlations.cli.contract import format_rows
-
-    from bem.drop import solve_drop
+    from bem.drop import solve_drop  # lazy: bem and scipy.linalg off the estimate's start-up
     with _options_named():           # the solver checks its inputs before any BEM work
         res = solve_drop(args.lam, args.ca, n_modes=args.modes, tol=args.tol,
                          max_time=args.max_time)
@@ -157,9 +156,7 @@ def _vesicle_solver_options(args) -> dict:
 
 def cmd_bem_vesicle(args):
     """Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the axis."""
-    from correlations.cli.contract import format_rows
-
-    from bem.vesicle import solve_vesicle
+    from bem.vesicle import solve_vesicle  # lazy: bem and scipy off the estimate's start-up
     with _options_named():           # the solver checks its inputs before any BEM work
         res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
                             max_time=args.max_time, **_vesicle_solver_options(args))
@@ -195,11 +192,7 @@ def cmd_bem_vesicle(args):
 
 def _sweep_values(args):
     """The confinements of ``--lam A B N`` or ``--lam-ratio A B N`` (N points, A to B)."""
-    import numpy as np
-
-    from correlations.cli.contract import UsageError
-
-    from bem.sweep import MAX_POINTS
+    from bem.sweep import MAX_POINTS  # lazy: bem and scipy off the estimate's start-up
     option, (a, b, n) = (("--lam", args.lam) if args.lam is not None
                          else ("--lam-ratio", args.lam_ratio))
     if not (math.isfinite(n) and n.is_integer() and n >= 2):
@@ -221,7 +214,6 @@ _SWEEP_TABLE = (("lam", "lam=R0/R", ".5g"), ("lam_ratio", "lam/lam_c", ".4f"),
 
 def _sweep_text(table, title: str) -> str:
     """One row per point, labelled columns; "—" for missing values."""
-    from correlations.cli.contract import format_value
     cells = [[h for _, h, _ in _SWEEP_TABLE]]
     for t in table:
         row = []
@@ -243,8 +235,9 @@ def _sweep_text(table, title: str) -> str:
 
 def cmd_bem_vesicle_sweep(args):
     """Steady vesicles over a range of confinements at fixed nu (continuation in lam)."""
-    from bem.sweep import confinements
-    from bem.vesicle import check_vesicle_inputs
+    from bem.sweep import (  # lazy: bem and scipy off the estimate's start-up
+        confinements, save_sweep, sweep_table, sweep_vesicle)
+    from bem.vesicle import check_vesicle_inputs  # lazy: bem and scipy off the estimate's start-up
     points = _sweep_values(args)
     solver = _vesicle_solver_options(args)
     with _options_named():
@@ -252,7 +245,6 @@ def cmd_bem_vesicle_sweep(args):
                                       args.ca_b)
         check_vesicle_inputs(args.nu, float(lams[0]), ca_b=args.ca_b, max_time=args.max_time,
                              **solver)
-    from bem.sweep import save_sweep, sweep_table, sweep_vesicle
     done = []
 
     def report(i, n, res, seconds):
@@ -282,9 +274,7 @@ def cmd_bem_vesicle_sweep(args):
     if args.out:
         out["files"] = [str(p) for p in save_sweep(args.out, results, solver)]
     if args.plot:
-        from correlations.cli.contract import save_plot
-
-        from bem.plotting import plot_vesicle_sweep
+        from bem.plotting import plot_vesicle_sweep  # lazy: bem off the estimate's start-up
         save_plot(plot_vesicle_sweep(results), args.plot)
     title = (f"Vesicle sweep (BEM), nu = {r0.nu:g}, lam_c = {r0.lam_c:.4g}, Ca_B = "
              f"{r0.ca_b:g}: {out['n_converged']}/{len(results)} points converged; "
@@ -296,7 +286,6 @@ def cmd_bem_vesicle_sweep(args):
 def _vesicle_options(p, sweep: bool) -> None:
     """Inputs and refinement options of ``bem vesicle`` (one lam) and ``vesicle-sweep``
     (``--lam A B N``)."""
-    from correlations.cli.contract import add_max_time_option, finite_float, positive_int
     p.add_argument("--nu", type=finite_float, required=True, help="reduced volume, 0 < nu < 1 [-]")
     g = p.add_mutually_exclusive_group(required=True)
     many = {"nargs": 3, "metavar": ("A", "B", "N")} if sweep else {}
@@ -338,12 +327,6 @@ def _output_options(p, func, *, plot: str, out: str | None = None,
 
 def add_bem_parser(subparsers) -> None:
     """Add ``bem sphere``, ``drop``, ``vesicle`` and ``vesicle-sweep`` to the subcommands."""
-    from correlations.cli.contract import (
-        Parser,
-        add_max_time_option,
-        finite_float,
-        positive_int,
-    )
     logging.getLogger("bem").addHandler(logging.NullHandler())
     b = subparsers.add_parser("bem", help="boundary element solvers: rigid sphere, clean drop, vesicle")
     sub = b.add_subparsers(dest="bem_command", required=True, parser_class=Parser)

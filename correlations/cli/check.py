@@ -5,8 +5,8 @@ with a ``rows`` list, each row with its ``verdict`` and its ``checks``); exit 0 
 fails (warnings allowed), 1 when a row fails, 2 for unreadable input (one line naming the row
 and column), 130 on Ctrl-C. ``--report FILE.md|FILE.html`` writes a report with a figure of the
 rows over the references (Markdown: the figure beside it as ``FILE.png``; HTML: embedded); its
-path and format are checked before any work. Light at start: numpy, matplotlib and the solvers
-load only inside the command.
+path and format are checked before any work. Light at start: the check (with the solvers it
+calls) and matplotlib load only inside the command.
 """
 
 from __future__ import annotations
@@ -16,13 +16,16 @@ import html
 import io
 from pathlib import Path
 
+from lubrication.io import atomic_write
+from correlations.cli.contract import add_map_option, options_named
+from correlations.plotting import plot_check
+
 __all__ = ["add_check_parser", "cmd_check", "write_report"]
 
 
 def cmd_check(args):
-    from correlations.cli.contract import options_named
-
-    from correlations.check import check_results
+    from correlations.check import (  # lazy: correlations.check off the estimate's start-up
+        check_results)
     with options_named({"map": "--map"}, args):
         report = check_results(args.file, bem=not args.no_bem, solution_map=args.map)
     out = {"command": "check", "converged": True, **report.to_dict()}
@@ -36,7 +39,8 @@ def cmd_check(args):
 def _blocks(report, figure: str) -> list:
     """The report as blocks (``("h1"|"h2"|"p", text)``, ``("table", head, rows)``,
     ``("ul", items)``, ``("img", name)``), rendered by :func:`_markdown` or :func:`_html`."""
-    from correlations.check import TOLERANCE_RULE, format_cell
+    from correlations.check import (  # lazy: correlations.check off the estimate's start-up
+        TOLERANCE_RULE, format_cell)
     counts = ", ".join(f"{n} {v}" for v, n in report.counts.items())
     prov = report.provenance
     blocks = [("h1", f"Consistency check of {report.source}"),
@@ -116,11 +120,7 @@ def write_report(report, path) -> Path:
     """Write ``report`` (a :class:`~correlations.check.CheckReport`) as Markdown (``.md``,
     ``.markdown``; the figure beside it as ``<stem>.png``) or HTML (``.html``, ``.htm``; the
     figure embedded), each file atomically. Returns the report's path."""
-    import matplotlib.pyplot as plt
-
-    from lubrication.io import atomic_write
-
-    from correlations.plotting import plot_check
+    import matplotlib.pyplot as plt  # lazy: matplotlib
     path = Path(path)
     ax = plot_check(report)
     buffer = io.BytesIO()
@@ -140,7 +140,6 @@ def write_report(report, path) -> Path:
 
 def add_check_parser(subparsers) -> None:
     """Add ``check`` to the subcommands."""
-    from correlations.cli.contract import add_map_option
     p = subparsers.add_parser(
         "check", help="check results (CSV or JSON rows: your V/U, dp+, length, film) against "
                       "the physics and our references")

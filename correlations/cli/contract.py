@@ -30,6 +30,7 @@ import tempfile
 from pathlib import Path
 
 from lubrication import io
+from lubrication.checks import InvalidParameterError
 
 from correlations.formatting import format_value, format_value_error
 
@@ -71,7 +72,6 @@ def options_named(options: dict, args=None):
     (``options``: parameter name -> option, e.g. ``{"velocity_mm_s": "--velocity-mm-s"}``),
     marked "(default)" when ``args`` shows the user did not type it. Parameters not in
     ``options`` propagate unchanged (their message names the parameter)."""
-    from lubrication.checks import InvalidParameterError
     try:
         yield
     except InvalidParameterError as exc:
@@ -152,7 +152,7 @@ def check_output_dir(option: str, path) -> Path:
 
 def _plot_formats() -> dict:
     """The file formats matplotlib can write, ``{extension: description}``."""
-    from matplotlib.backend_bases import FigureCanvasBase
+    from matplotlib.backend_bases import FigureCanvasBase  # lazy: matplotlib
     return FigureCanvasBase.get_supported_filetypes()
 
 
@@ -200,7 +200,7 @@ def check_report_path(option: str, path) -> Path:
 
 def save_plot(ax, path) -> Path:
     """Write the figure of ``ax`` to ``path`` atomically (PNG when there is no extension)."""
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: matplotlib
     ext = Path(path).suffix.lstrip(".").lower() or "png"
     try:
         io.atomic_write(path, lambda f: ax.figure.savefig(f, format=ext, dpi=150,

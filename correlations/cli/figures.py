@@ -6,8 +6,8 @@ when the figures were written (disagreements with the paper are results, not err
 bad input (``--out``, ``--format``, ``--only``, checked before any work), 130 on Ctrl-C (the
 figures, cache files and solves finished before it are complete and kept). Writes
 ``DIR/<figure>.<format>``, ``DIR/figures.json``, ``DIR/figures.md`` and ``DIR/cache/``;
-progress goes to stderr, one line per figure. Light at start: numpy, matplotlib and the solvers
-load only inside the command.
+progress goes to stderr, one line per figure. Light at start: matplotlib and the solvers load
+only when a figure is drawn or solved (inside :mod:`correlations.figures`).
 """
 
 from __future__ import annotations
@@ -15,6 +15,10 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
+
+from lubrication.io import atomic_write, provenance, write_json
+from correlations.cli.contract import UsageError, add_map_option, finite_float, options_named
+from correlations.figures import FIGURES, FigureContext, make_figure, render_markdown
 
 __all__ = ["add_figures_parser", "cmd_figures", "FORMATS"]
 
@@ -27,11 +31,6 @@ def _progress(text: str) -> None:
 
 
 def cmd_figures(args):
-    from correlations.cli.contract import options_named
-    from lubrication.io import atomic_write, provenance, write_json
-
-    from correlations.figures import FIGURES, FigureContext, make_figure, render_markdown
-    from correlations.cli.contract import UsageError
     if not args.bem_max_time > 0:
         raise UsageError(f"--bem-max-time {args.bem_max_time:g}: must be > 0 [s]")
     names = list(dict.fromkeys(args.only or FIGURES))
@@ -81,10 +80,6 @@ def cmd_figures(args):
 
 def add_figures_parser(subparsers) -> None:
     """Add ``figures`` to the subcommands."""
-    from correlations.cli.contract import finite_float
-
-    from correlations.cli.contract import add_map_option
-    from correlations.figures import FIGURES
     p = subparsers.add_parser(
         "figures", help="regenerate the figures of Chen et al. (2020) from our solvers and "
                         "solution map and check the paper's statements")

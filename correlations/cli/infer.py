@@ -9,6 +9,10 @@ the solution map matches the data, 1 when none does (the verdict and the residua
 
 from __future__ import annotations
 
+from correlations.cli.contract import (UsageError, add_map_option, finite_float, format_rows,
+                                      format_value, format_value_error, options_named,
+                                      positive_int)
+
 __all__ = ["add_infer_parser", "cmd_infer"]
 
 #: the option a user types for each parameter of :func:`correlations.infer.infer_cell`
@@ -30,12 +34,8 @@ ROWS = (("nu", "reduced volume nu"), ("lam", "confinement lam = R0/R"),
 
 
 def cmd_infer(args):
-    from correlations.cli.contract import (format_rows, format_value, format_value_error,
-                                          options_named)
-
-    from correlations.cli.contract import UsageError
-
-    from correlations.infer import infer_cell, mean_velocity_from_gradient
+    from correlations.infer import (  # lazy: correlations.infer off the estimate's start-up
+        infer_cell, mean_velocity_from_gradient)
     with options_named(OPTIONS, args):
         u_mm_s, u_err = args.u_mm_s, args.u_err
         if args.dpdx_pa_m is not None:
@@ -78,9 +78,6 @@ def _intervals(q) -> str:
 
 def add_infer_parser(subparsers) -> None:
     """Add ``infer`` to the subcommands."""
-    from correlations.cli.contract import finite_float, positive_int
-
-    from correlations.cli.contract import add_map_option
     p = subparsers.add_parser(
         "infer", help="infer a cell (nu, lam, volume, area, film, dp+, tension) from its "
                       "measured speed and length in a tube, with uncertainties")

@@ -24,9 +24,12 @@ import csv
 import math
 from pathlib import Path
 
+import numpy as np
+
+from lubrication import plotting
 from lubrication.checks import InvalidParameterError, check_positive
 from correlations.cli.contract import (UsageError, add_max_time_option, finite_float, format_rows,
-                                      format_value, positive_int)
+                                      format_value, positive_int, save_plot)
 from lubrication.io import atomic_write, clean_json
 from lubrication.results import Status
 
@@ -149,7 +152,8 @@ def cmd_lubrication(args):
         raise UsageError(f"{', '.join(given)} go(es) with --sweep")
     if args.lam is None and args.lam_ratio is None:
         raise UsageError("give --lam LAM or --lam-ratio R (or --sweep)")
-    from lubrication.solve import check_inputs, solve_lubrication
+    from lubrication.solve import (  # lazy: scipy.integrate off the estimate's start-up
+        check_inputs, solve_lubrication)
     check_inputs(args.nu, args.lam, args.lam_ratio, args.ca_b, names=OPTION_NAMES)
     max_time = _check_max_time(args)
     res = solve_lubrication(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
@@ -173,8 +177,6 @@ def _plot(ok: bool, kind: str, what, path, failed: str) -> list[str]:
     ``ok``; else the note that says why no figure was written."""
     if not ok:
         return [f"{failed}: no figure written to {path}"]
-    from correlations.cli.contract import save_plot
-    from lubrication import plotting                 # lazy: matplotlib
     draw = plotting.plot_shape if kind == "shape" else plotting.plot_sweep
     save_plot(draw(what), path)
     return []
@@ -202,7 +204,8 @@ def _single_rows(out: dict, success: bool) -> list:
 # --------------------------------------------------------------------------- sweep
 def _sweep_ratios(args):
     """Checked (from, to, points) of a sweep; the defaults follow the model's range."""
-    from lubrication.solve import MAX_SWEEP_POINTS, check_inputs, lowest_lam_ratio
+    from lubrication.solve import (  # lazy: scipy.integrate off the estimate's start-up
+        MAX_SWEEP_POINTS, check_inputs, lowest_lam_ratio)
     nu = check_inputs(args.nu, lam_ratio=SWEEP_TO, ca_b=args.ca_b, names=OPTION_NAMES)[0]
     ratio_from, ratio_to = args.ratio_from, args.ratio_to
     if ratio_from is None:
@@ -227,9 +230,8 @@ def _sweep_ratios(args):
 
 
 def _sweep(args):
-    import numpy as np
-
-    from lubrication.solve import sweep_lubrication
+    from lubrication.solve import (  # lazy: scipy.integrate off the estimate's start-up
+        sweep_lubrication)
     nu, ratio_from, ratio_to, points = _sweep_ratios(args)
     max_time = _check_max_time(args)
     ratios = np.linspace(ratio_from, ratio_to, points)

@@ -1,13 +1,22 @@
 """``vesicle-tube map build | pack | query``: the solution map on the command line.
 
 Follows :mod:`correlations.cli.contract` (table or ``--json``; exit 0 ok, 2 invalid input with one
-line naming the option or file, 130 interrupted). Light at start: the solvers, numpy and Dask
-load only inside the commands that use them.
+line naming the option or file, 130 interrupted). Light at start: the build (with the solvers
+and Dask) loads only inside ``map build``.
 """
 
 from __future__ import annotations
 
+import json
 import sys
+from pathlib import Path
+
+from lubrication.checks import check_positive, check_range
+from lubrication.geometry import critical_confinement
+from correlations.cli.contract import (EXIT_INTERRUPTED, Parser, UsageError, add_map_option,
+                                      check_output_dir, finite_float, format_rows, format_value,
+                                      is_interrupt, options_named, positive_int)
+from correlations.solution_map import load_map, outside_reason, pack_map, query_map, read_points
 
 __all__ = ["add_map_parser"]
 
@@ -22,7 +31,6 @@ UNITS = {"V_over_U": "-", "dp_plus_R0": "eta U/R0", "ell": "R", "film_min": "R",
 
 
 def _named(args, **renamed):
-    from correlations.cli.contract import options_named
     return options_named({**OPTIONS, **renamed}, args)
 
 
@@ -34,10 +42,8 @@ def _progress(state) -> None:
 
 
 def cmd_map_build(args):
-    from correlations.cli.contract import EXIT_INTERRUPTED, format_rows, is_interrupt
-
-    from correlations.map_build import build_map, make_grid
-    from correlations.solution_map import read_points
+    from correlations.map_build import (  # lazy: the solvers and scipy off the estimate's start-up
+        DEFAULT_GRID, build_map, make_grid)
     grid_given = any(v is not None for v in (args.nu, args.lam_ratio, args.lam_ratio_bem,
                                              args.lam_ratio_lubrication, args.ca_b, args.methods))
     with _named(args):
@@ -45,7 +51,6 @@ def cmd_map_build(args):
         if grid_given:
             ratios = args.lam_ratio
             if args.lam_ratio_bem is not None or args.lam_ratio_lubrication is not None:
-                from correlations.map_build import DEFAULT_GRID
                 ratios = {m: (given if given is not None else
                               (args.lam_ratio or DEFAULT_GRID["lam_ratio"][m]))
                           for m, given in (("bem", args.lam_ratio_bem),
@@ -136,11 +141,6 @@ def coverage(data: dict) -> str:
 
 
 def cmd_map_pack(args):
-    from pathlib import Path
-
-    from correlations.cli.contract import UsageError, check_output_dir
-
-    from correlations.solution_map import pack_map
     target = args.pack_out
     if target is not None:
         if Path(target).is_dir():
@@ -154,22 +154,15 @@ def cmd_map_pack(args):
                          "(no build.json)")
     with _named(args):
         path = pack_map(args.folder, target)
-    import json
     data = json.loads(path.read_text(encoding="utf-8"))
     out = {"command": "map pack", "converged": True, "map": str(path),
            "points": len(data["columns"]["nu"]), "holes": len(data["holes"]),
            "bytes": path.stat().st_size, "coverage": coverage_summary(data)}
-    from correlations.cli.contract import format_rows
     rows = [(k, out[k], "", "", "") for k in ("map", "points", "holes", "bytes")]
     return out, format_rows(rows, f"Packed {args.folder}") + "\n\n" + coverage(data)
 
 
 def cmd_map_query(args):
-    from lubrication.checks import check_positive, check_range
-    from correlations.cli.contract import UsageError, format_rows, format_value
-    from lubrication.geometry import critical_confinement
-
-    from correlations.solution_map import load_map, outside_reason, query_map
     if (args.lam is None) == (args.lam_ratio is None):
         raise UsageError("give exactly one of --lam LAM, --lam-ratio RATIO")
     with _named(args, lam_ratio="--lam" if args.lam is not None else "--lam-ratio"):
@@ -215,10 +208,6 @@ def cmd_map_query(args):
 
 def add_map_parser(subparsers) -> None:
     """Add ``map build``, ``map pack`` and ``map query`` to the subcommands."""
-    from correlations.cli.contract import Parser, finite_float, positive_int
-
-    from correlations.cli.contract import add_map_option
-
     p = subparsers.add_parser("map", help="precomputed solution map: build, pack, query")
     sub = p.add_subparsers(dest="map_command", required=True, parser_class=Parser)
 
