@@ -54,9 +54,9 @@ benchmark: $(BIN)/vesicle-tube
 
 # The HTML reference in build/docs/html: the pages of docs/ and the API of the three packages
 # (Sphinx; warnings are errors; the docstrings' >>> examples run as doctests in `make test`).
-# Sphinx and MyST-Parser are installed on first use.
+# Sphinx, MyST-Parser and MathJax (served with the pages) are installed on first use.
 docs: $(BIN)/vesicle-tube
-	$(BIN)/python -c 'import sphinx, myst_parser' 2>/dev/null || $(BIN)/python -m pip install --quiet -e '.[docs]'
+	$(BIN)/python -c 'import importlib, sphinx, myst_parser; importlib.import_module("sphinx-mathjax-offline")' 2>/dev/null || $(BIN)/python -m pip install --quiet -e '.[docs]'
 	$(BIN)/sphinx-build -W --keep-going -b html docs build/docs/html
 
 clean:
