@@ -187,7 +187,7 @@ def probes(tmp: Path) -> list[Probe]:
           Probe(["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--ca-b", "1e308", "--json"],
                 (1, 2), "huge Ca_B"),
           Probe(["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--json"], (0, 1)),
-          Probe(["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--max-time", "2", "--json"],
+          Probe(["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--max-time", "0.05", "--json"],
                 (1,), "time limit"),
           Probe(["bem", "vesicle", "--nu", "0.9", "--lam", "5"], (2,)),
           Probe(["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--modes", "100000"], (2,)),
