@@ -114,12 +114,8 @@ def dp_plus_small_sphere(lam):
     .. math:: \Delta p^+ a/(\eta U) = 16\lambda^6 + O(\lambda^{11})
 
     Chen et al. 2020 eq. small2 (exact Stokes solution plus the reciprocal theorem; Brenner 1970).
-    Scaled with the sphere radius :math:`a` (= :math:`R_0` for a vesicle).
-
-    Parameters
-    ----------
-    lam : float or array_like
-        Size ratio a/R, 0 < lam < 1 [-]; accurate for lam <= 0.5 (:data:`SMALL_SPHERE_RANGE`).
+    Scaled with the sphere radius :math:`a` (= :math:`R_0` for a vesicle); ``lam`` and its
+    range as in :func:`speed_small_sphere`.
 
     Returns
     -------
@@ -145,12 +141,8 @@ def speed_small_drop(lam):
     Faxén law of a drop, :math:`V = u(0) + \frac{k}{2(3k+2)}a^2\nabla^2 u`, at :math:`k = 1`
     (:math:`k \to \infty` gives the rigid sphere, :func:`speed_small_sphere`). Only the
     viscosity ratio 1 is implemented: the general-ratio forms could not be checked against the
-    original papers.
-
-    Parameters
-    ----------
-    lam : float or array_like
-        Size ratio a/R, 0 < lam < 1 [-]; warned above 0.5 (:data:`SMALL_DROP_RANGE`).
+    original papers. ``lam`` as in :func:`speed_small_sphere`, warned above 0.5
+    (:data:`SMALL_DROP_RANGE`).
 
     Returns
     -------
@@ -173,12 +165,7 @@ def dp_plus_small_drop(lam):
     .. math:: \Delta p^+ a/(\eta U) = 4.8\,\lambda^6
 
     Hetsroni, Haber & Wacholder 1970, viscosity ratio 1 (the rigid-sphere coefficient is 16,
-    :func:`dp_plus_small_sphere`).
-
-    Parameters
-    ----------
-    lam : float or array_like
-        Size ratio a/R, 0 < lam < 1 [-]; warned above 0.5 (:data:`SMALL_DROP_RANGE`).
+    :func:`dp_plus_small_sphere`). ``lam`` as in :func:`speed_small_drop`.
 
     Returns
     -------
