@@ -49,6 +49,7 @@ import logging
 import math
 import multiprocessing
 import os
+import re
 import signal
 import sys
 import time
@@ -466,10 +467,19 @@ def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
             client.close()
 
 
+def _own_temporaries(folder: Path) -> list[Path]:
+    """The temporaries of :func:`lubrication.io.atomic_write` (``.NAME.XXXXXXXX.tmp``) of the
+    files a build writes (``build.json`` and the point files): other files in the folder, and
+    temporaries of files of other names, are not the build's to remove."""
+    own = re.compile(r"\.(build\.json|(bem|lubrication)_nu[^/]*_lr[^/]*_caB[^/]*\.json)"
+                     r"\.[^./]+\.tmp")
+    return [p for p in folder.glob(".*.tmp") if own.fullmatch(p.name) and p.is_file()]
+
+
 def _run(folder, grid, options, workers, client, max_time, retry_failed, progress, pack,
          provenance) -> dict:
     started = time.monotonic()
-    for tmp in folder.glob(".*.tmp"):      # left by a killed build (atomic_write's temporaries)
+    for tmp in _own_temporaries(folder):   # left by a killed build
         tmp.unlink(missing_ok=True)
     stored: dict = {}
     for p in read_points(folder):

@@ -236,13 +236,17 @@ def test_resume_solves_only_the_missing_points_and_warm_starts_from_the_stored_s
     (tmp_path / point_filename("bem", 0.8, 0.3, 50.0)).unlink()
     (tmp_path / point_filename("bem", 0.95, 0.3, 50.0)).unlink()
     (tmp_path / ".bem_nu0.9_lr0.3_caB50.json.abc.tmp").write_text("{half")   # a killed write
+    theirs = [tmp_path / ".notes.tmp", tmp_path / ".results.json.k3x9.tmp"]   # not the build's
+    for f in theirs:
+        f.write_text("the user's")
     CALLS.clear()
     again = build_map(tmp_path, None, workers=1)      # resume: the stored grid
     assert [c[0] for c in CALLS] == [0.95, 0.8]         # the failed 0.85 is not recomputed
     # 0.8 warm-starts from the *stored* record of 0.9 (the last converged point on disk)
     assert CALLS[1][3] == (0.9, 0.3)
     assert again["new"] == 2 and again["done"] == 4
-    assert not list(tmp_path.glob(".*.tmp"))
+    assert sorted(tmp_path.glob(".*.tmp")) == sorted(theirs)   # only its own temporaries go
+    assert all(f.read_text() == "the user's" for f in theirs)
     CALLS.clear()
     build_map(tmp_path, None, workers=1, retry_failed=True)
     assert [c[0] for c in CALLS] == [0.85]
