@@ -20,7 +20,8 @@ OPTIONS = {"v_mm_s": "--v-mm-s", "v_over_u": "--v-over-u", "length_um": "--lengt
            "diameter_um": "--diameter-um", "u_mm_s": "--u-mm-s", "eta_mpas": "--eta-mpas",
            "dpdx_pa_m": "--dpdx-pa-m",
            "kappa_j": "--kappa-j", "v_err": "--v-err", "length_err": "--length-err",
-           "diameter_err": "--diameter-err", "u_err": "--u-err", "map": "--map"}
+           "diameter_err": "--diameter-err", "u_err": "--u-err", "map": "--map",
+           "samples": "--samples"}
 
 #: rows of the table, in order, with their labels
 ROWS = (("nu", "reduced volume nu"), ("lam", "confinement lam = R0/R"),

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from correlations.infer import Verdict, infer_cell, infer_map
+from correlations.infer import MAX_SAMPLES, Verdict, infer_cell, infer_map
 from correlations.solution_map import DEFAULT_MAP
 from lubrication.checks import InvalidParameterError
 
@@ -92,6 +92,9 @@ def test_cell_volume_and_area_follow_from_nu_and_lam():
     (dict(length_um=float("nan"), diameter_um=6.0, u_mm_s=1.0, v_mm_s=1.3), "length_um"),
     (dict(length_um=8.0, diameter_um=6.0, u_mm_s=1.0), "v_mm_s"),
     (dict(length_um=8.0, diameter_um=6.0, u_mm_s=1.0, v_mm_s=1.3, v_err=-1.0), "v_err"),
+    (dict(length_um=8.0, diameter_um=6.0, u_mm_s=1.0, v_mm_s=1.3, samples=MAX_SAMPLES + 1),
+     "samples"),
+    (dict(length_um=8.0, diameter_um=6.0, u_mm_s=1.0, v_mm_s=1.3, samples=2.5), "samples"),
 ])
 def test_bad_input_names_the_parameter(kwargs, name):
     with pytest.raises(InvalidParameterError) as info:
@@ -108,6 +111,9 @@ def test_cli_exit_codes_and_json(capsys):
     assert main(["infer", "--v-mm-s", "1.3", "--length-um", "8", "--diameter-um", "-6",
                  "--u-mm-s", "1"]) == 2
     assert "--diameter-um" in capsys.readouterr().err
+    assert main(["infer", "--v-mm-s", "1.3", "--length-um", "8", "--diameter-um", "6",
+                 "--u-mm-s", "1", "--samples", str(MAX_SAMPLES + 1)]) == 2
+    assert "--samples" in capsys.readouterr().err
     assert main(["infer", "--v-mm-s", "1.3", "--length-um", "8", "--diameter-um", "6",
                  "--u-mm-s", "1", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
