@@ -60,7 +60,7 @@ from lubrication.checks import InvalidParameterError, check_range
 from lubrication.geometry import critical_confinement
 from lubrication.io import provenance as run_provenance
 from lubrication.io import write_json
-from lubrication.results import Status, leading_status
+from lubrication.results import Status, leading_status, status_of
 from lubrication.solve import solve_lubrication
 from bem import vesicle   # its solve_vesicle read at call time (tests patch it)
 from bem.shape import SpectralCurve
@@ -420,7 +420,8 @@ def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
     -------
     dict
         ``total``, ``done``, ``failed``, ``missing`` point counts, ``new`` (solved now),
-        ``seconds``, ``errors`` (lines that raised) and ``map`` (the packed file or None).
+        ``timed_out`` (of those, stopped at ``max_time``), ``seconds``, ``errors`` (lines that
+        raised) and ``map`` (the packed file or None).
     """
     folder = Path(folder)
     options = {m: {**DEFAULT_OPTIONS.get(m, {}), **(options or {}).get(m, {})} for m in METHODS}
@@ -488,7 +489,7 @@ def _run(folder, grid, options, workers, client, max_time, retry_failed, progres
             stored.setdefault(key, {})[(round(p["nu"], 9), round(p["lam_ratio"], 9))] = p
     lines = line_tasks(grid)
     total = sum(len(points) for _, _, points in lines)
-    state = {"total": total, "new": 0, "failed": 0, "running": 0, "errors": []}
+    state = {"total": total, "new": 0, "failed": 0, "timed_out": 0, "running": 0, "errors": []}
 
     def missing(method, ca, points) -> int:
         have = stored.get((method, round(ca, 9)), {})
@@ -514,6 +515,7 @@ def _run(folder, grid, options, workers, client, max_time, retry_failed, progres
     def on_point(record) -> None:
         state["new"] += 1
         state["failed"] += not record["success"]
+        state["timed_out"] += status_of(record) is Status.TIME_LIMIT
         report()
 
     args = (options, max_time, provenance)
@@ -527,6 +529,7 @@ def _run(folder, grid, options, workers, client, max_time, retry_failed, progres
     packed = pack_map(folder) if pack else None
     missing = total - done_before - state["new"]
     return {"total": total, "done": total - missing, "failed": state["failed"],
+            "timed_out": state["timed_out"],
             "missing": missing, "new": state["new"], "errors": state["errors"],
             "seconds": time.monotonic() - started, "map": str(packed) if packed else None}
 
@@ -592,8 +595,9 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
             if fresh or finished:
                 seen |= fresh
                 state["new"] += len(fresh)
-                state["failed"] += sum(not json.loads((Path(folder) / n).read_text())["success"]
-                                       for n in fresh)
+                records = [json.loads((Path(folder) / n).read_text()) for n in fresh]
+                state["failed"] += sum(not r["success"] for r in records)
+                state["timed_out"] += sum(status_of(r) is Status.TIME_LIMIT for r in records)
                 state["running"] = len(pending)
                 report()
     except BaseException:

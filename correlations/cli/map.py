@@ -75,9 +75,16 @@ def cmd_map_build(args):
             print(f"vesicle-tube map build: interrupted; {n} points stored in {args.out} (every "
                   "file complete); run the same command again to resume", file=sys.stderr)
             raise SystemExit(EXIT_INTERRUPTED) from None
-    out = {"command": "map build", "converged": not out["errors"], "out": str(args.out), **out}
-    if out["errors"]:       # a line task crashed (not a failed point: those are stored holes)
-        out["message"] = "; ".join(out["errors"])
+    out = {"command": "map build", "converged": not (out["errors"] or out["timed_out"]),
+           "out": str(args.out), **out}
+    problems = list(out["errors"])  # a line task crashed (a failed point is a stored hole)
+    if out["timed_out"]:            # --max-time reached: exit 1, as for every command
+        n = out["timed_out"]
+        problems.append(f"{n} point{'s' if n != 1 else ''} stopped at --max-time "
+                        f"{args.max_time:g} s (stored as failed; rerun with --retry-failed and "
+                        "a larger budget)")
+    if problems:
+        out["message"] = "; ".join(problems)
     if out["failed"]:
         out["warnings"] = [f"{out['failed']} points failed (holes of the map, with their "
                            "reasons in the packed file)"]

@@ -297,3 +297,24 @@ def test_a_line_runs_on_the_threads_it_is_given():
     t.start()
     t.join()
     assert seen == [1]
+
+
+def _timed_out_solver(nu, lam_ratio, ca_b, warm, options, max_time):
+    """Stands in for a solver that stops at its time limit at every point."""
+    return {"success": False, "status": "time limit",
+            "message": f"stopped at the time limit max_time={max_time:g} s"}, None
+
+
+def test_build_that_reaches_max_time_exits_1_and_says_so(tmp_path, monkeypatch, capsys):
+    """--max-time reached is exit 1, as for every command (the points are stored as failed);
+    a rerun that solves nothing new exits 0 with the stored holes as a warning."""
+    from correlations.cli import main
+    monkeypatch.setitem(map_build.SOLVERS, "bem", _timed_out_solver)
+    argv = ["map", "build", "--out", str(tmp_path / "d"), "--nu", "0.9", "--lam-ratio", "0.3",
+            "--ca-b", "50", "--methods", "bem", "--workers", "1", "--no-pack", "--json"]
+    assert main(argv + ["--max-time", "0.5"]) == 1
+    out = strict_json(capsys.readouterr().out)
+    assert out["converged"] is False and out["timed_out"] == 1 and "--max-time" in out["message"]
+    assert main(argv) == 0
+    out = strict_json(capsys.readouterr().out)
+    assert out["timed_out"] == 0 and out["failed"] == 1
