@@ -43,6 +43,7 @@ BEM); each point file stores its solve time (``seconds``), so a build's cost is 
 
 from __future__ import annotations
 
+import ctypes
 import datetime
 import json
 import logging
@@ -294,9 +295,20 @@ def _point(method, nu, lam_ratio, ca_b, warm, options, max_time, provenance):
 
 # --------------------------------------------------------------------------- one line
 
-def _ignore_sigint() -> None:
-    """Pool workers ignore Ctrl-C: the parent stops them (a terminal sends SIGINT to all)."""
+#: prctl option of Linux that sends a signal to a process when its parent dies
+PR_SET_PDEATHSIG = 1
+
+
+def _init_worker(parent: int) -> None:
+    """A pool worker ignores Ctrl-C (the parent stops its workers; a terminal sends SIGINT to
+    all) and dies with its parent, also when the parent is killed (SIGKILL leaves it no chance
+    to stop them): on Linux the kernel kills the worker then (``PR_SET_PDEATHSIG``); a parent
+    already gone when the worker starts ends it at once."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL))
+    if os.getppid() != parent:
+        os._exit(1)
 
 
 def _share_cores(threads: int | None) -> None:
@@ -562,7 +574,7 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
         cores = os.cpu_count() or 1
         n = min(workers or cores, max(len(jobs), 1))
         executor = ProcessPoolExecutor(n, mp_context=_pool_context(),
-                                       initializer=_ignore_sigint)
+                                       initializer=_init_worker, initargs=(os.getpid(),))
         threads = max(1, cores // n)
         submit = executor.submit
         parent = os.getpid()

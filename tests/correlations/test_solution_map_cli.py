@@ -318,3 +318,44 @@ def test_build_that_reaches_max_time_exits_1_and_says_so(tmp_path, monkeypatch, 
     assert main(argv) == 0
     out = strict_json(capsys.readouterr().out)
     assert out["timed_out"] == 0 and out["failed"] == 1
+
+
+def _alive(pid: int) -> bool:
+    """The process exists and is not a zombie (a killed child waits there for its reaper)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return state != "Z"
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the kernel's parent-death "
+                    "signal (PR_SET_PDEATHSIG) is Linux's")
+def test_workers_die_with_a_killed_build(tmp_path):
+    """kill -9 of a 2-worker build leaves no worker behind within 5 s (they would otherwise
+    block on their queue for ever, holding the caller's pipe)."""
+    script = (
+        "import time\n"
+        "from correlations import map_build\n"
+        "def slow(*args, **kwargs):\n"
+        "    time.sleep(120)\n"
+        "map_build.SOLVERS['bem'] = slow\n"
+        f"map_build.build_map({str(tmp_path / 'd')!r}, map_build.make_grid([0.9], [0.3], "
+        "[50.0, 500.0], ['bem']), workers=2, pack=False)\n")
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    children = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
+    workers, t0 = [], time.monotonic()
+    while len(workers) < 2 and time.monotonic() - t0 < 60:
+        time.sleep(0.2)
+        workers = [int(p) for p in children.read_text().split()]
+    assert len(workers) >= 2, workers
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    t0 = time.monotonic()
+    while any(_alive(p) for p in workers) and time.monotonic() - t0 < 5:
+        time.sleep(0.1)
+    left = [p for p in workers if _alive(p)]
+    for p in left:
+        os.kill(p, signal.SIGKILL)
+    assert not left, f"workers still alive 5 s after kill -9 of their build: {left}"
