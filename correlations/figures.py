@@ -46,7 +46,7 @@ import numpy as np
 from lubrication.asymptotics import (dp_plus_near_critical, dp_plus_small_sphere,
                                      speed_near_critical, speed_slope_near_critical,
                                      speed_small_sphere)
-from lubrication.checks import OutOfRangeWarning
+from lubrication.checks import InvalidParameterError, OutOfRangeWarning
 from lubrication.geometry import critical_confinement, critical_length, critical_reduced_volume
 from lubrication.io import atomic_write, clean_json, write_json
 from lubrication.plotting import plot_dp_plus_asymptotics, plot_speed_asymptotics
@@ -114,6 +114,25 @@ def _verdict(ok) -> str:
 
 # --------------------------------------------------------------------------- context and cache
 
+def _figure_map(path):
+    """The map at ``path``, refused (naming ``map``) unless it holds what the figures read: the
+    ν nodes :data:`NUS` at Ca_B = :data:`CA_B` and at least two λ/λc nodes (a map packed from
+    a small build is a valid map, but the paper's figures cannot be drawn from it)."""
+    m = load_map(path)
+    def has(values, v):
+        return any(abs(x - v) < 1e-9 for x in values)
+
+    missing = [f"nu = {nu:g}" for nu in NUS if not has(m.nus, nu)]
+    missing += [] if has(m.cas, CA_B) else [f"Ca_B = {CA_B:g}"]
+    missing += [] if len(m.ratios) >= 2 else ["two lam/lam_c nodes"]
+    if missing:
+        raise InvalidParameterError(
+            "map", str(path), "a map with the figures' nodes nu = "
+            + ", ".join(f"{nu:g}" for nu in NUS) + f" at Ca_B = {CA_B:g} and at least two "
+            f"lam/lam_c (this one lacks {', '.join(missing)})")
+    return m
+
+
 class FigureContext:
     """What every figure reads: the map, the build folder's points, the cache folder, the
     BEM time budget, and a progress callback."""
@@ -123,7 +142,7 @@ class FigureContext:
         self.out = Path(out)
         self.cache = self.out / "cache"
         self.map_path = Path(map_path or DEFAULT_MAP)
-        self.map = load_map(self.map_path)
+        self.map = _figure_map(self.map_path)
         self.build = Path(build or Path(DEFAULT_MAP).with_name("solution_map_build"))
         self.bem_max_time = float(bem_max_time)
         self.progress = progress or (lambda text: None)

@@ -337,6 +337,18 @@ def _check_samples(samples) -> int:
                            reason="refitted draws (0: the uncertainty method decides)"))
 
 
+def _inverse_map(solution_map) -> SolutionMap:
+    """The map to invert (default the shipped one), refused unless it spans at least two ν
+    and two λ/λc nodes: two unknowns cannot be fitted inside a single node (a map packed
+    from a build of one line or point is read, but cannot be inverted)."""
+    m = solution_map if isinstance(solution_map, SolutionMap) else load_map(solution_map)
+    if len(m.nus) < 2 or len(m.ratios) < 2:
+        raise InvalidParameterError(
+            "map", m.source or "the given map", "a map with at least two nu and two lam/lam_c "
+            f"nodes to invert (this one has {len(m.nus)} and {len(m.ratios)})")
+    return m
+
+
 def _check_inputs(values: dict) -> None:
     """Every value positive and finite; each error non-negative and finite."""
     for name, value in values.items():
@@ -658,7 +670,7 @@ def infer_map(V_over_U: float, ell: float, V_over_U_err: float | None = None,
     ca_b = DEFAULT_CA_B if ca_free else ca_b
     errors = {k: DEFAULT_RELATIVE_ERROR * v if errors[k] is None else float(errors[k])
               for k, v in (("V_over_U", V_over_U), ("ell", ell))}
-    m = solution_map if isinstance(solution_map, SolutionMap) else load_map(solution_map)
+    m = _inverse_map(solution_map)
     measured = {"V_over_U": float(V_over_U), "ell": float(ell)}
 
     def derive(meas):
@@ -760,7 +772,7 @@ def infer_cell(length_um: float, diameter_um: float, u_mm_s: float,
             f"{DEFAULT_CA_B:g} (shapes change little for Ca_B >= 50, Chen et al. 2020)"
             + (", the posterior integrates over the map's Ca_B (log-uniform)"
                if uncertainty == "posterior" and not samples else ""))
-    m = solution_map if isinstance(solution_map, SolutionMap) else load_map(solution_map)
+    m = _inverse_map(solution_map)
 
     def derive(meas):
         d, U, L = meas["diameter_um"], meas["u_mm_s"], meas["length_um"]

@@ -108,3 +108,21 @@ def test_ctrl_c_during_a_solve_exits_130_and_keeps_only_complete_files(tmp_path)
     last = err.strip().splitlines()[-1]
     assert "interrupted" in last and str(out / "phase.png") in last
     assert not [p for p in out.rglob("*") if p.name.startswith(".")]
+
+
+def test_a_map_without_the_figures_nodes_is_refused_before_any_work(tmp_path, monkeypatch,
+                                                                     capsys):
+    """`map pack` of a one-point build writes a valid map from which the paper's figures
+    cannot be drawn: exit 2 naming --map and what it lacks, before any file is written."""
+    from test_solution_map import _fake_solver
+
+    from correlations import map_build
+    from correlations.cli import main
+    monkeypatch.setitem(map_build.SOLVERS, "bem", _fake_solver)
+    packed = map_build.build_map(tmp_path / "b", map_build.make_grid([0.9], [0.3], [50.0],
+                                                                     ["bem"]), workers=1)["map"]
+    out = tmp_path / "figs"
+    assert main(["figures", "--out", str(out), "--only", "speed", "--map", packed]) == 2
+    err = capsys.readouterr().err
+    assert "--map" in err and "nu = 0.6" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()

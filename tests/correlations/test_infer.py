@@ -170,3 +170,22 @@ def test_a_degenerate_inverse_reports_the_valley_and_covers_the_truth():
         q = r.quantities[name]
         assert q.low95 <= truth <= q.high95, (name, q)
     assert any(n.startswith("degenerate: nu between") for n in r.notes), r.notes
+
+
+def test_a_map_of_one_node_is_refused_naming_map(tmp_path, monkeypatch, capsys):
+    """A map that `map pack` wrote from a one-point build is read, but two unknowns cannot be
+    fitted inside one node: infer exits 2 naming --map, before any fit (no traceback)."""
+    from test_solution_map import _fake_solver
+
+    from correlations import map_build
+    from correlations.cli import main
+    monkeypatch.setitem(map_build.SOLVERS, "bem", _fake_solver)
+    packed = map_build.build_map(tmp_path / "b", map_build.make_grid([0.9], [0.3], [50.0],
+                                                                     ["bem"]), workers=1)["map"]
+    with pytest.raises(InvalidParameterError) as info:
+        infer_map(1.5, 2.0, solution_map=packed)
+    assert info.value.name == "map" and "at least two" in str(info.value)
+    assert main(["infer", "--v-over-u", "1.5", "--length-um", "4", "--diameter-um", "4",
+                 "--u-mm-s", "1", "--map", packed]) == 2
+    err = capsys.readouterr().err
+    assert "--map" in err and len(err.strip().splitlines()) == 1
