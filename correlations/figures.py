@@ -56,7 +56,7 @@ from .plotting import plot_relative_viscosity
 from .pressure import (dp_plus_film_chen2020, dp_plus_small_sphere_coupling,
                        dp_plus_speed_fit_chen2020)
 from .shape import transition_reduced_volume_chen2020
-from .solution_map import DEFAULT_MAP, load_map, query_map, read_points
+from .solution_map import DEFAULT_MAP, POINT_GLOB, load_map, query_map, read_points
 from .viscosity import (discharge_hematocrit_fahraeus, relative_viscosity,
                         viscosity_single_file_chen2020)
 
@@ -153,7 +153,7 @@ class FigureContext:
         """The map's provenance and content hash, and the build folder's point files (name
         and size): what the cached data depend on."""
         digest = hashlib.sha256(self.map_path.read_bytes()).hexdigest()
-        files = sorted((p.name, p.stat().st_size) for p in self.build.glob("*_nu*_lr*_caB*.json"))
+        files = sorted((p.name, p.stat().st_size) for p in self.build.glob(POINT_GLOB))
         build = hashlib.sha256(json.dumps(files).encode()).hexdigest()
         return {"map_provenance": self.map.provenance, "map_sha256": digest,
                 "build_files_sha256": build}

@@ -45,12 +45,12 @@ from __future__ import annotations
 
 import ctypes
 import datetime
+import fnmatch
 import json
 import logging
 import math
 import multiprocessing
 import os
-import re
 import signal
 import sys
 import time
@@ -62,11 +62,9 @@ from lubrication.geometry import critical_confinement
 from lubrication.io import provenance as run_provenance
 from lubrication.io import write_json
 from lubrication.results import Status, leading_status, status_of
-from lubrication.solve import solve_lubrication
-from bem import vesicle   # its solve_vesicle read at call time (tests patch it)
-from bem.shape import SpectralCurve
 
-from .solution_map import POINT_FORMAT, QUANTITIES, pack_map, point_filename, read_points
+from .solution_map import (POINT_FORMAT, POINT_GLOB, QUANTITIES, pack_map, point_filename,
+                           read_points)
 
 __all__ = ["DEFAULT_GRID", "DEFAULT_OPTIONS", "METHODS", "SOLVERS", "make_grid", "line_tasks",
            "solve_line", "build_map"]
@@ -170,6 +168,8 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     The point's status is CONVERGED if a start converged, else the leading status of the failed
     starts (:func:`lubrication.results.leading_status`). Returns (record fields, the warm start
     of the next point or None)."""
+    from bem import vesicle  # lazy: scipy and the BEM off the build's input checks
+    from bem.shape import SpectralCurve  # lazy: with bem.vesicle
 
     def neighbour():
         lam = lam_ratio * float(critical_confinement(nu))
@@ -233,6 +233,7 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
 def _solve_lubrication(nu, lam_ratio, ca_b, warm, options, max_time):
     """One lubrication point (bending model at ``ca_b``). ``warm``: a LubricationResult or
     None (stored records hold no solver state: cold start)."""
+    from lubrication.solve import solve_lubrication  # lazy: scipy off the build's input checks
     initial = None if isinstance(warm, dict) else warm
     try:
         res = solve_lubrication(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial,
@@ -484,9 +485,10 @@ def _own_temporaries(folder: Path) -> list[Path]:
     """The temporaries of :func:`lubrication.io.atomic_write` (``.NAME.XXXXXXXX.tmp``) of the
     files a build writes (``build.json`` and the point files): other files in the folder, and
     temporaries of files of other names, are not the build's to remove."""
-    own = re.compile(r"\.(build\.json|(bem|lubrication)_nu[^/]*_lr[^/]*_caB[^/]*\.json)"
-                     r"\.[^./]+\.tmp")
-    return [p for p in folder.glob(".*.tmp") if own.fullmatch(p.name) and p.is_file()]
+    def own(name: str) -> bool:             # ".NAME.XXXXXXXX.tmp" -> NAME
+        target = name[1:].rsplit(".", 2)[0]
+        return target == "build.json" or fnmatch.fnmatchcase(target, POINT_GLOB)
+    return [p for p in folder.glob(".*.tmp") if own(p.name) and p.is_file()]
 
 
 def _run(folder, grid, options, workers, client, max_time, retry_failed, progress, pack,
@@ -547,7 +549,7 @@ def _run(folder, grid, options, workers, client, max_time, retry_failed, progres
 
 
 def _point_names(folder) -> set[str]:
-    return {p.name for p in Path(folder).glob("*_nu*_lr*_caB*.json")
+    return {p.name for p in Path(folder).glob(POINT_GLOB)
             if not p.name.startswith(".")}
 
 
@@ -573,11 +575,11 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
     if client is None:
         cores = os.cpu_count() or 1
         n = min(workers or cores, max(len(jobs), 1))
+        parent = os.getpid()
         executor = ProcessPoolExecutor(n, mp_context=_pool_context(),
-                                       initializer=_init_worker, initargs=(os.getpid(),))
+                                       initializer=_init_worker, initargs=(parent,))
         threads = max(1, cores // n)
         submit = executor.submit
-        parent = os.getpid()
     else:
         def submit(*a, **k):
             return client.submit(*a, pure=False, **k)

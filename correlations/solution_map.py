@@ -120,8 +120,8 @@ from lubrication.checks import CannotPassError, InvalidParameterError, as_finite
 from lubrication.io import atomic_write, clean_json
 from lubrication.results import status_of
 
-__all__ = ["FORMAT", "POINT_FORMAT", "QUANTITIES", "TRANSFORMS", "DEFAULT_MAP", "CA_B_CLAMP_MAX",
-           "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
+__all__ = ["FORMAT", "POINT_FORMAT", "POINT_GLOB", "QUANTITIES", "TRANSFORMS", "DEFAULT_MAP",
+           "CA_B_CLAMP_MAX", "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
            "read_points", "pack_map", "load_map", "query_map"]
 
 #: identifiers of the packed file and of a stored point (checked on load)
@@ -188,6 +188,10 @@ def _num(x) -> str:
     return f"{float(x):.10g}"
 
 
+#: the names :func:`point_filename` gives, as a glob pattern
+POINT_GLOB = "*_nu*_lr*_caB*.json"
+
+
 def point_filename(method: str, nu: float, lam_ratio: float, ca_b: float) -> str:
     """File name of a stored point, e.g. ``bem_nu0.9_lr0.95_caB50.json``.
 
@@ -228,7 +232,7 @@ def read_point(path) -> dict:
 def read_points(folder) -> list[dict]:
     """Every stored point of a build folder (files named like :func:`point_filename`)."""
     folder = Path(folder)
-    return [read_point(p) for p in sorted(folder.glob("*_nu*_lr*_caB*.json"))
+    return [read_point(p) for p in sorted(folder.glob(POINT_GLOB))
             if not p.name.startswith(".")]
 
 
