@@ -3,8 +3,8 @@
 Registered by :func:`correlations.cli.build_parser` through :func:`add_bem_parser`; the contract
 is the one of :mod:`correlations.cli.contract` (table for people, one JSON object with ``--json``, exit
 0 / 2 invalid input with one line on stderr / 1 not converged with the JSON still printed and
-``"converged": false``). Whether a solve converged is read from its status
-(:class:`lubrication.results.Status`), written as ``"status"`` beside ``"converged"``. The
+``"converged": false``); the JSON holds the solve's ``"status"``
+(:class:`lubrication.results.Status`) beside ``"converged"``. The
 ``bem`` package loads inside the command functions (and with it scipy, numba at the first solve
 and matplotlib for a plot), so that ``vesicle-tube estimate``, which registers these commands,
 stays fast.
@@ -15,8 +15,8 @@ gives the unit or scale of each value ("-" dimensionless, "R", "1/R", "U", "eta 
 "eta U/R0", "s"); the pressure drop of a vesicle is dp+ in units of eta U/R0 (Chen et al.
 2020), as in the plot title.
 
-Every option is checked before any BEM work (and before numba loads) by the solver module's
-``check_*_inputs``; a value outside its range or outside the solver's resource envelope is
+Every option is checked before any BEM work (and before numba loads) by the solver itself
+(``check_*_inputs``, called first); a value outside its range or outside the solver's resource envelope is
 exit 2 with one line naming the option. A solve that fails prints "—" (JSON null) for every
 physical number.
 """
@@ -30,7 +30,6 @@ import sys
 import numpy as np
 
 from lubrication.io import clean_json
-from lubrication.results import Status
 from correlations.cli.contract import (Parser, UsageError, add_max_time_option, finite_float,
                                       format_rows, format_value, options_named, positive_int,
                                       save_plot)
@@ -52,20 +51,13 @@ def _options_named():
     return options_named(_OPTIONS)
 
 
-def _converged(res) -> bool:
-    """Whether a solve converged, from its status."""
-    return res.status is Status.CONVERGED
-
-
 def cmd_bem_sphere(args):
     """Free rigid sphere of radius lam R on the axis of Poiseuille flow."""
     from bem.solve import solve_sphere  # lazy: bem off the estimate's start-up
     with _options_named():           # the solver checks its inputs before any BEM work
         res = solve_sphere(args.lam, panels=args.panels, tol=args.tol, max_time=args.max_time)
-    ok = _converged(res)
-    out = {"command": "bem", "subcommand": "sphere"}
-    out.update(res.to_dict())
-    out["converged"] = ok
+    ok = res.success
+    out = {"command": "bem", "subcommand": "sphere", **res.to_dict()}
     errors = {"V_over_U": res.V_over_U_err, "dp_plus_R": res.dp_plus_R_err,
               "dp_plus_R0": res.dp_plus_R_err * res.lam, "drag_K": res.drag_K_err}
     out["error_estimate"] = clean_json(errors)
@@ -92,8 +84,7 @@ def cmd_bem_sphere(args):
 def _shape_result_json(res, subcommand: str, args) -> dict:
     """JSON object of a drop/vesicle result; with --out the files are written and listed
     (physical fields null and no profile rows when the solve failed)."""
-    out = {"command": "bem", "subcommand": subcommand, **res.to_dict(shape=False),
-           "converged": _converged(res)}
+    out = {"command": "bem", "subcommand": subcommand, **res.to_dict(shape=False)}
     if args.out:
         out["files"] = [str(p) for p in res.save(args.out)]
     return out
@@ -126,7 +117,7 @@ def cmd_bem_drop(args):
                          max_time=args.max_time)
     out = _shape_result_json(res, "drop", args)
     method, pm = _method_and_error(res)
-    ok = _converged(res)
+    ok = res.success
     # physical numbers from out: the result's to_dict gives None for them after a failed solve
     rows = [("confinement lam = R0/R", res.lam, "-", "input", ""),
             ("capillary number Ca = eta U/gamma", res.ca, "-", "input", ""),
@@ -162,7 +153,7 @@ def cmd_bem_vesicle(args):
                             max_time=args.max_time, **_vesicle_solver_options(args))
     out = _shape_result_json(res, "vesicle", args)
     method, pm = _method_and_error(res)
-    ok = _converged(res)
+    ok = res.success
     # physical numbers from out: the result's to_dict gives None for them after a failed solve
     curv = (f"{res.curvature_rear:.4g} / {res.curvature_front:.4g}" if ok else None)
     rows = [("reduced volume nu", res.nu, "-", "input", ""),
@@ -265,8 +256,8 @@ def cmd_bem_vesicle_sweep(args):
     r0 = results[0]
     out = {"command": "bem", "subcommand": "vesicle-sweep", "nu": r0.nu, "lam_c": r0.lam_c,
            "ca_b": r0.ca_b, "parameters": solver,
-           "converged": all(_converged(r) for r in results), "n_points": len(results),
-           "n_converged": sum(_converged(r) for r in results),
+           "converged": all(r.success for r in results), "n_points": len(results),
+           "n_converged": sum(r.success for r in results),
            "points": table}
     if not out["converged"]:
         out["message"] = f"{len(results) - out['n_converged']} of {len(results)} points did " \

@@ -31,7 +31,6 @@ from lubrication.checks import InvalidParameterError, check_positive
 from correlations.cli.contract import (UsageError, add_max_time_option, finite_float, format_rows,
                                       format_value, positive_int, save_plot)
 from lubrication.io import atomic_write, clean_json
-from lubrication.results import Status
 
 #: Option names of the inputs, for the messages of the library's checks.
 OPTION_NAMES = {"nu": "--nu", "lam": "--lam", "lam_ratio": "--lam-ratio", "ca_b": "--ca-b"}
@@ -158,8 +157,8 @@ def cmd_lubrication(args):
     max_time = _check_max_time(args)
     res = solve_lubrication(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
                             max_time=max_time)
-    ok = res.status is Status.CONVERGED
-    out = {"command": "lubrication", **res.to_dict(), "converged": ok, "units": UNITS}
+    ok = res.success
+    out = {"command": "lubrication", **res.to_dict(), "units": UNITS}
     notes = []
     if args.out:
         out["files"] = [str(p) for p in res.save(args.out)]
@@ -238,10 +237,10 @@ def _sweep(args):
     results = sweep_lubrication(nu, ratios, ca_b=args.ca_b, progress=not args.json,
                                 max_time=max_time)
     table = [{k: _column(r, k) for k in SWEEP_COLUMNS} for r in results]
-    n_ok = sum(r.status is Status.CONVERGED for r in results)
+    n_ok = sum(r.success for r in results)
     converged = n_ok == len(results)
     r0 = results[0]
-    failed = [r for r in results if r.status is not Status.CONVERGED]
+    failed = [r for r in results if not r.success]
     first = min(failed, key=lambda r: r.lam_ratio) if failed else None
     message = ("all points converged" if converged else
                f"{len(failed)} of {len(results)} points did not converge; at the lowest of them, "
@@ -286,7 +285,7 @@ def _sweep_table(table, title: str) -> str:
 
 def _column(res, key):
     if key == "converged":
-        return res.status is Status.CONVERGED
+        return res.success
     value = getattr(res, key)
     if key not in ("lam_ratio", "lam", "delta", "message") and not res.success:
         return None             # no physical numbers from a failed solve
