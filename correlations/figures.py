@@ -16,9 +16,11 @@ Sources of the numbers
 Cache
     Every figure's data is one JSON file in ``<out>/cache``, named by the figure and a hash of
     its parameters and of the map's and build folder's fingerprints (provenance, content hash,
-    point files), written atomically (:func:`lubrication.io.write_json`). A run with the cache
-    filled only draws. Each solve is cached on its own, keyed by its parameters and its seed
-    (not by the map), so an interrupted run keeps them and a new map does not redo them.
+    point files), written atomically (:func:`lubrication.io.write_json`) with a checksum of its
+    data. A run with the cache filled only draws; a cache file that is unreadable or fails its
+    checksum is ignored and recomputed (:meth:`FigureContext.cached`). Each solve is cached on
+    its own, keyed by its parameters and its seed (not by the map), so an interrupted run keeps
+    them and a new map does not redo them.
 
 Comparison
     Each figure returns :class:`Statement` rows: the paper's statement, our value, the paper's
@@ -52,6 +54,7 @@ from lubrication.io import atomic_write, clean_json, write_json
 from lubrication.plotting import plot_dp_plus_asymptotics, plot_speed_asymptotics
 
 from .film import C0_CHEN2020, film_from_capillary_chen2020
+from .files import UnreadableFile, read_json
 from .plotting import plot_relative_viscosity
 from .pressure import (dp_plus_film_chen2020, dp_plus_small_sphere_coupling,
                        dp_plus_speed_fit_chen2020)
@@ -112,6 +115,14 @@ def _verdict(ok) -> str:
     return "agree" if ok else "disagree"
 
 
+def _unchecked(figure: str, statement: str, paper: str, tolerance: str, lacks: str) -> Statement:
+    """A statement the map cannot check because it has no value where the check reads one (a
+    map with holes there, or a smaller range than the shipped one): "not checked", saying
+    what the map lacks."""
+    return Statement(figure, statement, paper, "—", tolerance, "not checked",
+                     f"the map has no {lacks}")
+
+
 # --------------------------------------------------------------------------- context and cache
 
 def _figure_map(path):
@@ -162,27 +173,47 @@ class FigureContext:
     def points(self) -> list[dict]:
         """Every stored point of the build folder (read once)."""
         if self._points is None:
-            self._points = read_points(self.build) if self.build.is_dir() else []
+            self._points = read_points(self.build, name="build") if self.build.is_dir() else []
         return self._points
 
     def cached(self, what: str, params: dict, compute, inputs=None):
         """``compute()`` (JSON-ready data) cached in ``cache/<what>-<hash>.json``, the hash over
         ``params`` and ``inputs``: what the data depend on besides the parameters, by default
         :attr:`fingerprint` (a solve gives {} or its seed). Returns (data, True if read from
-        the cache)."""
+        the cache).
+
+        The cache is this program's own: a cache file that cannot be read (not a regular
+        file, too large, not strict JSON, read through :func:`correlations.files.read_json`)
+        or that is not what this call would have written (other key, or data whose checksum
+        ``sha256`` does not match: truncated, edited or corrupted) is ignored, reported through
+        the progress callback, and recomputed and rewritten; it never stops the command."""
         inputs = self.fingerprint if inputs is None else inputs
         key = json.dumps({"what": what, "params": params, "inputs": inputs},
                          sort_keys=True, default=str)
         path = self.cache / f"{what}-{hashlib.sha256(key.encode()).hexdigest()[:16]}.json"
-        if path.is_file():
+        if path.exists():
+            why = "it does not hold this figure's data with a matching checksum"
             try:
-                return json.loads(path.read_text(encoding="utf-8"))["data"], True
-            except (OSError, ValueError, KeyError):
-                pass                                    # unreadable: recompute
-        data = clean_json(compute())
+                stored = read_json(path, name="cache", what="a figure cache file")
+                if (isinstance(stored, dict) and "data" in stored
+                        and stored.get("key") == key
+                        and stored.get("sha256") == _checksum(key, stored["data"])):
+                    return stored["data"], True
+            except UnreadableFile as exc:
+                why = str(exc)
+            self.progress(f"  cache file {path.name} ignored ({why}): recomputed")
+        # through JSON once, so that the data returned now are those a later run reads back
+        data = json.loads(json.dumps(clean_json(compute()), allow_nan=False))
         self.cache.mkdir(parents=True, exist_ok=True)
-        write_json(path, {"what": what, "params": params, "inputs": inputs, "data": data})
+        write_json(path, {"what": what, "params": params, "inputs": inputs, "key": key,
+                          "sha256": _checksum(key, data), "data": data})
         return data, False
+
+
+def _checksum(key: str, data) -> str:
+    """SHA-256 of a cache file's key and data (its data as JSON with sorted keys)."""
+    text = key + json.dumps(data, sort_keys=True, allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def _query_curves(ctx: FigureContext, nus, ratios, ca_b=CA_B) -> dict:
@@ -236,6 +267,8 @@ def _used_nodes(ctx, ca_b=CA_B) -> list[dict]:
                                                "V_over_U", "dp_plus_R0", "ell", "film_min",
                                                "tension_max", "tension_front", "curvature_rear",
                                                "shape_class")})
+            if rows[-1]["lam"] is None:      # a map packed without the lam column
+                rows[-1]["lam"] = c["lam_ratio"][i] * float(critical_confinement(c["nu"][i]))
     return rows
 
 
@@ -549,9 +582,13 @@ def _small_sphere_rows(figure, nodes, key, law, name, eq):
             devs = [p[key] / float(law(p["lam"])) - 1.0 for p in small]
         if nu == 0.6:
             return rows, devs
+        text = f"λ < 0.5: {name} within 1 % of the small-sphere law (eq. {eq}), ν = {nu:g}"
+        if not devs:
+            rows.append(_unchecked(figure, text, "< 0.01", "≤ 0.01",
+                                   f"node with λ < 0.5 at ν = {nu:g}, Ca_B = {CA_B:g}"))
+            continue
         dev = max(abs(d) for d in devs)
-        rows.append(Statement(figure, f"λ < 0.5: {name} within 1 % of the small-sphere law "
-                              f"(eq. {eq}), ν = {nu:g}", "< 0.01", _fmt(dev, 3), "≤ 0.01",
+        rows.append(Statement(figure, text, "< 0.01", _fmt(dev, 3), "≤ 0.01",
                               _verdict(dev <= 0.01), "largest relative deviation over the "
                               f"map nodes λ = {', '.join(_fmt(p['lam'], 3) for p in small)}"))
 
@@ -565,33 +602,52 @@ def figure_speed(ctx):
     ax.set_ylim(0.95, 2.05)
     rows, devs = _small_sphere_rows("speed", nodes, "V_over_U", speed_small_sphere, "V/U",
                                     "small1")
-    dev = min(devs)
-    rows.append(Statement("speed", "ν = 0.6 is an exception at λ < 0.5: decreased mobility",
-                          "V/U below eq. small1 by more than 1 %", _fmt(dev, 3), "< −0.01",
-                          _verdict(dev < -0.01), "most negative relative deviation from "
-                          "eq. small1 over the ν = 0.6 nodes with λ < 0.5"))
-    below, slopes = 0, []
+    text = "ν = 0.6 is an exception at λ < 0.5: decreased mobility"
+    if devs:
+        dev = min(devs)
+        rows.append(Statement("speed", text, "V/U below eq. small1 by more than 1 %",
+                              _fmt(dev, 3), "< −0.01", _verdict(dev < -0.01),
+                              "most negative relative deviation from eq. small1 over the "
+                              "ν = 0.6 nodes with λ < 0.5"))
+    else:
+        rows.append(_unchecked("speed", text, "V/U below eq. small1 by more than 1 %",
+                               "< −0.01", f"node with λ < 0.5 at ν = 0.6, Ca_B = {CA_B:g}"))
+    below, missing, slopes = 0, [], []
     for nu in NUS:
         c = curves[f"{nu:g}"]
         i98 = min(range(len(c["lam_ratio"])), key=lambda i: abs(c["lam_ratio"][i] - 0.98))
-        lam = c["lam"][i98]
-        with _quiet():
-            below += c["V_over_U"][i98] < float(speed_near_critical(nu, lam))
-        slopes.append((nu, (c["V_over_U"][-1] - 1.0) / (1.0 - c["lam_ratio"][-1]),
+        lam, v98, last = c["lam"][i98], c["V_over_U"][i98], c["V_over_U"][-1]
+        if v98 is None:
+            missing.append(f"{nu:g}")
+        else:
+            with _quiet():
+                below += v98 < float(speed_near_critical(nu, lam))
+        slopes.append((nu, None if last is None else (last - 1.0) / (1.0 - c["lam_ratio"][-1]),
                        float(speed_slope_near_critical(nu))))
-    rows.append(Statement("speed", "near λc the numerical V/U is slightly below eq. asmyp1",
-                          "below", f"{below} of {len(NUS)} ν below at λ/λc ≈ 0.98",
-                          "all", _verdict(below == len(NUS)), "map at λ/λc = 0.98"))
+    text = "near λc the numerical V/U is slightly below eq. asmyp1"
+    if missing:
+        rows.append(_unchecked("speed", text, "below", "all", "V/U at λ/λc = 0.98 for ν = "
+                               + ", ".join(missing)))
+    else:
+        rows.append(Statement("speed", text, "below", f"{below} of {len(NUS)} ν below at "
+                              "λ/λc ≈ 0.98", "all", _verdict(below == len(NUS)),
+                              "map at λ/λc = 0.98"))
     for nu, ours, theirs in slopes:
-        rows.append(Statement("speed", f"limiting slope d(V/U)/dδ as δ → 0 (eq. asmyp1), "
-                              f"ν = {nu:g}", _fmt(theirs), _fmt(ours), "± 0.02",
+        text = f"limiting slope d(V/U)/dδ as δ → 0 (eq. asmyp1), ν = {nu:g}"
+        if ours is None:
+            rows.append(_unchecked("speed", text, _fmt(theirs), "± 0.02",
+                                   f"V/U at λ/λc = 0.9999 for ν = {nu:g}"))
+            continue
+        rows.append(Statement("speed", text, _fmt(theirs), _fmt(ours), "± 0.02",
                               _within(ours, theirs, 0.02),
                               "(V/U − 1)/δ of the map at λ/λc = 0.9999 (lubrication); a "
                               "uniform-film spherocylinder gives 1"))
     vals = [v for c in curves.values() for v in c["V_over_U"] if v is not None]
-    rows.append(Statement("speed", "the relative velocity lies between 1 and 2", "1 < V/U < 2",
-                          f"{_fmt(min(vals))} … {_fmt(max(vals))}", "strict",
-                          _verdict(1.0 < min(vals) and max(vals) < 2.0), "map curves"))
+    text = "the relative velocity lies between 1 and 2"
+    rows.append(Statement("speed", text, "1 < V/U < 2", f"{_fmt(min(vals))} … {_fmt(max(vals))}",
+                          "strict", _verdict(1.0 < min(vals) and max(vals) < 2.0), "map curves")
+                if vals else _unchecked("speed", text, "1 < V/U < 2", "strict",
+                                        f"V/U on the curves at Ca_B = {CA_B:g}"))
     return fig, rows, cached
 
 
@@ -602,22 +658,36 @@ def figure_pressure(ctx):
                                                   "Δp⁺R0/(ηU) [-]")
     rows, devs = _small_sphere_rows("pressure", nodes, "dp_plus_R0", dp_plus_small_sphere,
                                     "Δp⁺", "small2")
-    dev = max(devs)
-    rows.append(Statement("pressure", "ν = 0.6 is an exception at λ < 0.5: enhanced pressure "
-                          "drop", "Δp⁺ above eq. small2 by more than 1 %", _fmt(dev, 3),
-                          "> 0.01", _verdict(dev > 0.01), "largest relative excess over the "
-                          "ν = 0.6 nodes with λ < 0.5"))
-    span = [p["dp_plus_R0"] for p in nodes if p["nu"] in NUS and p["lam_ratio"] <= 0.98]
-    decades = math.log10(max(span) / min(span))
-    rows.append(Statement("pressure", "Δp⁺R0/(ηU) varies over six orders of magnitude", "6",
-                          _fmt(decades, 3), "± 0.5 decade", _within(decades, 6.0, 0.5),
-                          "log10(max/min) over the map nodes of the ν curves, λ/λc 0.2–0.98"))
+    text = "ν = 0.6 is an exception at λ < 0.5: enhanced pressure drop"
+    if devs:
+        dev = max(devs)
+        rows.append(Statement("pressure", text, "Δp⁺ above eq. small2 by more than 1 %",
+                              _fmt(dev, 3), "> 0.01", _verdict(dev > 0.01), "largest relative "
+                              "excess over the ν = 0.6 nodes with λ < 0.5"))
+    else:
+        rows.append(_unchecked("pressure", text, "Δp⁺ above eq. small2 by more than 1 %",
+                               "> 0.01", f"node with λ < 0.5 at ν = 0.6, Ca_B = {CA_B:g}"))
+    span = [p["dp_plus_R0"] for p in nodes
+            if p["nu"] in NUS and p["lam_ratio"] <= 0.98 and p["dp_plus_R0"] > 0]
+    text = "Δp⁺R0/(ηU) varies over six orders of magnitude"
+    if len(span) >= 2:
+        decades = math.log10(max(span) / min(span))
+        rows.append(Statement("pressure", text, "6", _fmt(decades, 3), "± 0.5 decade",
+                              _within(decades, 6.0, 0.5), "log10(max/min) over the map nodes "
+                              "of the ν curves, λ/λc 0.2–0.98"))
+    else:
+        rows.append(_unchecked("pressure", text, "6", "± 0.5 decade", "two nodes with Δp⁺ > 0 "
+                               f"on the ν curves at Ca_B = {CA_B:g}, λ/λc <= 0.98"))
     for nu in NUS:
         c = curves[f"{nu:g}"]
+        text = f"near λc the limiting behaviour of eq. asmyp2 is captured, ν = {nu:g}"
+        if c["dp_plus_R0"][-1] is None:
+            rows.append(_unchecked("pressure", text, "ratio 1", "± 0.1",
+                                   f"Δp⁺ at λ/λc = 0.9999 for ν = {nu:g}"))
+            continue
         with _quiet():
             ratio = c["dp_plus_R0"][-1] / float(dp_plus_near_critical(nu, c["lam"][-1]))
-        rows.append(Statement("pressure", f"near λc the limiting behaviour of eq. asmyp2 is "
-                              f"captured, ν = {nu:g}", "ratio 1", _fmt(ratio), "± 0.1",
+        rows.append(Statement("pressure", text, "ratio 1", _fmt(ratio), "± 0.1",
                               _within(ratio, 1.0, 0.1), "map (lubrication) over eq. asmyp2 at "
                               "λ/λc = 0.9999; eq. asmyp2 drops an O(1) term"))
     return fig, rows, cached
@@ -692,12 +762,18 @@ def figure_film_ca(ctx):
     pts, cached = ctx.cached("film_ca", {"ca_b": CA_B, "lam_ratio_min": 0.5},
                              lambda: _film_points(ctx))
     fig, (ax,) = _new_figure(1, 1, (6.4, 4.8))
+    if not pts:
+        lacks = f"node with λ/λc ≥ 0.5 and γ_F > 0 at Ca_B = {CA_B:g}"
+        ax.set_title(f"the map has no {lacks}", fontsize="small")
+        return fig, [_unchecked("film_ca", "film against Ca_v = ηV/γ_F: δ = c0 Ca_v^(2/3) "
+                                "(eq. sfilm4)", "c0 ≃ 2", "± 0.5", lacks)], cached
     ca_v = np.array([p["V_over_U"] / p["tension_front"] for p in pts])
     film = np.array([p["film_min"] for p in pts])
     for nu in sorted({p["nu"] for p in pts}):
         sel = np.array([abs(p["nu"] - nu) < 1e-9 for p in pts])
         ax.scatter(ca_v[sel], film[sel], s=14, label=f"ν = {nu:g}")
-    x = np.geomspace(ca_v.min(), min(ca_v.max(), 0.1), 50)   # the law's film stays < R
+    hi = min(ca_v.max(), 0.1)                     # the law's film stays < R
+    x = np.geomspace(min(ca_v.min(), hi / 10), hi, 50)
     with _quiet():
         ax.plot(x, film_from_capillary_chen2020(x), "k--", label="2 Ca_v^(2/3) (eq. sfilm4)")
         ax.plot(x, film_from_capillary_chen2020(x, 2.123), "k:", label="2.123 Ca_v^(2/3) (Secomb)")
@@ -707,36 +783,49 @@ def figure_film_ca(ctx):
     ax.set_ylabel("smallest gap h/R [-]")
     ax.legend(fontsize="x-small", ncol=2)
     rows = []
-    low = ca_v < 6e-3
-    slope = float(np.polyfit(np.log(ca_v[low]), np.log(film[low]), 1)[0])
-    rows.append(Statement("film_ca", "2/3-power regime for small Ca_v (eq. sfilm4)", "2/3",
-                          _fmt(slope, 3), "± 0.05", _within(slope, 2.0 / 3.0, 0.05),
-                          f"least-squares slope of log h vs log Ca_v, {int(low.sum())} map "
-                          "nodes with Ca_v < 6e-3 (λ/λc ≥ 0.5, Ca_B = 50)"))
-    c1 = ca_v < 1e-2
-    c0 = float(np.exp(np.mean(np.log(film[c1] / ca_v[c1] ** (2.0 / 3.0)))))
-    rows.append(Statement("film_ca", "fitted prefactor c0 ≃ 2 for Ca_v < 1e-2", _fmt(C0_CHEN2020),
-                          _fmt(c0, 3), "± 0.5 (half a unit of '2')", _within(c0, 2.0, 0.5),
-                          f"geometric mean of h/Ca_v^(2/3) over {int(c1.sum())} nodes"))
+    low = (ca_v < 6e-3) & (film > 0)
+    text = "2/3-power regime for small Ca_v (eq. sfilm4)"
+    if low.sum() >= 2:
+        slope = float(np.polyfit(np.log(ca_v[low]), np.log(film[low]), 1)[0])
+        rows.append(Statement("film_ca", text, "2/3", _fmt(slope, 3), "± 0.05",
+                              _within(slope, 2.0 / 3.0, 0.05), "least-squares slope of log h vs "
+                              f"log Ca_v, {int(low.sum())} map nodes with Ca_v < 6e-3 (λ/λc ≥ "
+                              "0.5, Ca_B = 50)"))
+    else:
+        rows.append(_unchecked("film_ca", text, "2/3", "± 0.05", "two nodes with Ca_v < 6e-3 "
+                               f"(λ/λc ≥ 0.5, Ca_B = {CA_B:g})"))
+    c1 = (ca_v < 1e-2) & (film > 0)
     delta = np.array([1.0 - p["lam_ratio"] for p in pts])
-    c0_delta = float(np.exp(np.mean(np.log(delta[c1] / ca_v[c1] ** (2.0 / 3.0)))))
-    rows.append(Statement("film_ca", "fitted prefactor c0 ≃ 2 for Ca_v < 1e-2, film measured "
-                          "by δ = 1 − λ/λc", _fmt(C0_CHEN2020), _fmt(c0_delta, 3),
-                          "± 0.5 (half a unit of '2')", _within(c0_delta, 2.0, 0.5),
-                          "as above with δ = 1 − λ/λc (eq. sfilm2) in place of the smallest gap"))
-    high = ca_v > 6e-3
+    for text, gap, note in (
+            ("fitted prefactor c0 ≃ 2 for Ca_v < 1e-2", film,
+             f"geometric mean of h/Ca_v^(2/3) over {int(c1.sum())} nodes"),
+            ("fitted prefactor c0 ≃ 2 for Ca_v < 1e-2, film measured by δ = 1 − λ/λc", delta,
+             "as above with δ = 1 − λ/λc (eq. sfilm2) in place of the smallest gap")):
+        if not c1.any():
+            rows.append(_unchecked("film_ca", text, _fmt(C0_CHEN2020), "± 0.5 (half a unit of "
+                                   "'2')", f"node with Ca_v < 1e-2 (λ/λc ≥ 0.5, Ca_B = {CA_B:g})"))
+            continue
+        c0 = float(np.exp(np.mean(np.log(gap[c1] / ca_v[c1] ** (2.0 / 3.0)))))
+        rows.append(Statement("film_ca", text, _fmt(C0_CHEN2020), _fmt(c0, 3),
+                              "± 0.5 (half a unit of '2')", _within(c0, 2.0, 0.5), note))
+    high = (ca_v > 6e-3) & (film > 0)
     if high.sum() >= 3:
         s2 = float(np.polyfit(np.log(ca_v[high]), np.log(film[high]), 1)[0])
         rows.append(Statement("film_ca", "1/2-power regime for large Ca_v (above ≃ 6e-3)",
                               "1/2", _fmt(s2, 3), "± 0.05", _within(s2, 0.5, 0.05),
                               f"slope over {int(high.sum())} nodes with Ca_v > 6e-3"))
-    ratio = np.array([p["tension_front"] / p["tension_max"] for p in pts])
-    near = np.array([p["lam_ratio"] >= 0.9 for p in pts])
-    rows.append(Statement("film_ca", "γ_F, the frontal tension, is also the highest tension",
-                          "γ_F = γ_max", f"smallest γ_F/γ_max for λ/λc ≥ 0.9: "
-                          f"{_fmt(ratio[near].min(), 3)}", "≥ 0.95",
-                          _verdict(ratio[near].min() >= 0.95),
-                          f"all nodes λ/λc ≥ 0.5: smallest {_fmt(ratio.min(), 3)}"))
+    ratio = np.array([p["tension_front"] / p["tension_max"] if p["tension_max"] else np.nan
+                      for p in pts])
+    near = np.array([p["lam_ratio"] >= 0.9 for p in pts]) & np.isfinite(ratio)
+    text = "γ_F, the frontal tension, is also the highest tension"
+    if near.any():
+        rows.append(Statement("film_ca", text, "γ_F = γ_max", "smallest γ_F/γ_max for λ/λc ≥ "
+                              f"0.9: {_fmt(ratio[near].min(), 3)}", "≥ 0.95",
+                              _verdict(ratio[near].min() >= 0.95),
+                              f"all nodes λ/λc ≥ 0.5: smallest {_fmt(np.nanmin(ratio), 3)}"))
+    else:
+        rows.append(_unchecked("film_ca", text, "γ_F = γ_max", "≥ 0.95", "node with λ/λc ≥ "
+                               f"0.9, γ_F > 0 and γ_max ≠ 0 at Ca_B = {CA_B:g}"))
     return fig, rows, cached
 
 
@@ -750,13 +839,14 @@ def figure_dp_scalings(ctx):
     nodes, c2 = ctx.cached("nodes", {"ca_b": CA_B}, lambda: _used_nodes(ctx))
     cached = c1 and c2
     fig, (a1, a2) = _new_figure(2, 1, (11.0, 4.6))
-    near = [p for p in nodes if 0.9 <= p["lam_ratio"] < 1.0]
+    near = [p for p in nodes if 0.9 <= p["lam_ratio"] < 1.0 and p["ell"] > 0
+            and p["dp_plus_R0"] > 0]
     alpha = np.array([p["lam"] * p["ell"] / (1.0 - p["lam_ratio"]) for p in near])
     dp = np.array([p["dp_plus_R0"] for p in near])
     for nu in sorted({p["nu"] for p in near}):
         sel = np.array([abs(p["nu"] - nu) < 1e-9 for p in near])
         a1.scatter(alpha[sel], dp[sel], s=12, label=f"ν = {nu:g}")
-    x = np.geomspace(alpha.min(), alpha.max(), 20)
+    x = np.geomspace(alpha.min(), alpha.max(), 20) if near else np.geomspace(1.0, 1e4, 20)
     with _quiet():
         a1.plot(x, dp_plus_film_chen2020(0.5 * x, 1.0, 0.5), "k--", label="(3/2)α (Chen)")
     a1.set_xscale("log")
@@ -768,7 +858,8 @@ def figure_dp_scalings(ctx):
         c = curves[f"{nu:g}"]
         pts = [(1.0 / v, d) for v, d in zip(c["V_over_U"], c["dp_plus_R0"])
                if v is not None and d is not None]
-        a2.plot(*zip(*pts), label=f"map, ν = {nu:g}")
+        if pts:
+            a2.plot(*zip(*pts), label=f"map, ν = {nu:g}")
     u = np.linspace(0.5, 0.9999, 200)
     with _quiet():
         a2.plot(u, dp_plus_small_sphere_coupling(1.0 / u), "k:", label="(27/4)(2 − V/U)³ (eq. dpa_v)")
@@ -778,16 +869,28 @@ def figure_dp_scalings(ctx):
     a2.set_xlabel("(V/U)⁻¹ [-]")
     a2.set_ylabel("Δp⁺R0/(ηU) [-]")
     a2.legend(fontsize="x-small")
-    ratio = dp / alpha
-    coef = float(np.exp(np.mean(np.log(ratio))))
-    rows = [Statement("dp_scalings", "Δp⁺R0/(ηU) ≃ (3/2) λℓ/δ near λc", "3/2", _fmt(coef, 3),
-                      "± 0.05 (half a unit of '1.5')", _within(coef, 1.5, 0.05),
-                      f"geometric mean of Δp⁺/α over {len(near)} map nodes with λ/λc ≥ 0.9 "
-                      f"(Ca_B = 50); range {_fmt(ratio.min(), 3)}–{_fmt(ratio.max(), 3)}; "
-                      "δ = 1 − λ/λc")]
+    text, tol = "Δp⁺R0/(ηU) ≃ (3/2) λℓ/δ near λc", "± 0.05 (half a unit of '1.5')"
+    if near:
+        ratio = dp / alpha
+        coef = float(np.exp(np.mean(np.log(ratio))))
+        rows = [Statement("dp_scalings", text, "3/2", _fmt(coef, 3), tol,
+                          _within(coef, 1.5, 0.05), f"geometric mean of Δp⁺/α over {len(near)} "
+                          f"map nodes with λ/λc ≥ 0.9 (Ca_B = 50); range {_fmt(ratio.min(), 3)}"
+                          f"–{_fmt(ratio.max(), 3)}; δ = 1 − λ/λc")]
+    else:
+        rows = [_unchecked("dp_scalings", text, "3/2", tol, "node with λ/λc ≥ 0.9 (and ℓ, "
+                           f"Δp⁺ > 0) at Ca_B = {CA_B:g}")]
     c = curves["0.6"]
     sel = [(1.0 / v, d) for v, d in zip(c["V_over_U"], c["dp_plus_R0"])
-           if v is not None and d is not None and 0.6 < 1.0 / v < 0.995]
+           if v is not None and d is not None and d > 0 and 0.6 < 1.0 / v < 0.995]
+    if len(sel) < 3:
+        lacks = f"three points with 0.6 < U/V < 0.995 on its ν = 0.6 curve at Ca_B = {CA_B:g}"
+        rows += [_unchecked("dp_scalings", "ν = 0.6: Δp⁺R0/(ηU) ≃ 3e-6 exp(20 U/V) for "
+                            "0.6 < U/V < 0.995 (exponent)", "20", "± 0.5", lacks),
+                 _unchecked("dp_scalings", "ν = 0.6 fit (prefactor)", "3e-6", "± 0.5e-6", lacks),
+                 _unchecked("dp_scalings", "the ν = 0.6 fit describes our ν = 0.6 curve", "fit",
+                            "≤ 1.5", lacks)]
+        return fig, rows, cached
     uu, dd = np.array(sel).T
     b, log_a = np.polyfit(uu, np.log(dd), 1)
     rows.append(Statement("dp_scalings", "ν = 0.6: Δp⁺R0/(ηU) ≃ 3e-6 exp(20 U/V) for "

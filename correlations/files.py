@@ -3,22 +3,25 @@
 Every input file passes the same gate before it is parsed (:func:`check_input_file`): it exists,
 it is a regular file (a FIFO would block, ``/dev/zero`` never ends, a folder is not a file), it
 is readable and not larger than the limit for its kind. JSON is then parsed strictly
-(:func:`read_json`): no NaN or Infinity, integers of at most :data:`MAX_INT_DIGITS` digits,
-nesting of at most ``max_depth`` levels, and the text must be UTF-8. Every failure is an
-:class:`UnreadableFile`, an :class:`~lubrication.checks.InvalidParameterError` that names the
-option (or parameter) that gave the file, the file and what is wrong, so that the command line
-answers with exit 2 and one line. What a file must contain (its schema) is checked by its
+(:func:`read_json`): no NaN, Infinity or number that overflows a double, integers of at most
+:data:`MAX_INT_DIGITS` digits, nesting of at most ``max_depth`` levels, UTF-8 text. Every
+failure is an :class:`UnreadableFile`, an :class:`~lubrication.checks.InvalidParameterError`
+that names the option (or parameter) that gave the file, the file and what is wrong, so that
+the command line answers with exit 2 and one line. What a file must contain (its schema) is checked by its
 reader after parsing, with :func:`expect`.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 import stat
 from pathlib import Path
 
 from lubrication.checks import InvalidParameterError
+
+from .formatting import short_path
 
 __all__ = ["UnreadableFile", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "MAX_INT_DIGITS",
            "check_input_file", "read_text", "read_json", "open_text", "expect"]
@@ -39,15 +42,7 @@ class UnreadableFile(InvalidParameterError):
 
     def __init__(self, name: str, path, what: str, reason: str):
         self.name, self.value, self.valid, self.path = name, str(path), what, str(path)
-        ValueError.__init__(self, f"{name} {_short(str(path))}: {reason} (expected {what})")
-
-
-def _short(path: str, keep: int = 120) -> str:
-    """``path`` for a message: quoted if it has spaces or is empty, its middle elided when
-    longer than ``keep`` characters."""
-    if len(path) > keep:
-        path = f"{path[:keep // 2]}...{path[-keep // 2:]} ({len(path)} characters)"
-    return repr(path) if not path or any(c.isspace() for c in path) else path
+        ValueError.__init__(self, f"{name} {short_path(path)}: {reason} (expected {what})")
 
 
 def _size_text(n: int) -> str:
@@ -126,6 +121,13 @@ def _int(text: str) -> int:
     return int(text)
 
 
+def _float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"{text} overflows a double (write a missing number as null)")
+    return value
+
+
 def _constant(text: str):
     raise ValueError(f"{text} is not strict JSON (write a missing number as null)")
 
@@ -145,8 +147,8 @@ def _depth(data) -> int:
 def read_json(path, *, name: str, what: str, max_bytes: int = MAX_JSON_BYTES,
               max_depth: int = MAX_JSON_DEPTH):
     """The parsed content of the JSON file ``path``, read by :func:`read_text` and parsed
-    strictly: no NaN or Infinity, integers of at most :data:`MAX_INT_DIGITS` digits, at most
-    ``max_depth`` levels of nesting. Raises :class:`UnreadableFile` for any failure.
+    strictly: no NaN, Infinity or overflowing number (``1e999``), integers of at most
+    :data:`MAX_INT_DIGITS` digits, at most ``max_depth`` levels of nesting. Raises :class:`UnreadableFile` for any failure.
 
     Examples
     --------
@@ -160,7 +162,7 @@ def read_json(path, *, name: str, what: str, max_bytes: int = MAX_JSON_BYTES,
     """
     text = read_text(path, name=name, what=what, max_bytes=max_bytes)
     try:
-        data = json.loads(text, parse_int=_int, parse_constant=_constant)
+        data = json.loads(text, parse_float=_float, parse_int=_int, parse_constant=_constant)
     except RecursionError:
         raise UnreadableFile(name, path, what, f"JSON nested too deeply (at most "
                              f"{max_depth} levels)") from None

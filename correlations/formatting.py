@@ -1,11 +1,12 @@
-"""How numbers are written for people: table cells and values with their error bars, shared by
-the estimate's notes and the command-line tables."""
+"""How numbers and paths are written for people: table cells and values with their error bars,
+shared by the estimate's notes and the command-line tables, and text and paths for one-line
+messages."""
 
 from __future__ import annotations
 
 import math
 
-__all__ = ["format_value", "format_value_error"]
+__all__ = ["format_value", "format_value_error", "one_line", "short_path"]
 
 
 def format_value(value) -> str:
@@ -44,3 +45,25 @@ def format_value_error(value, error) -> str:
     power = math.floor(math.log10(mag))
     digits, scale = power - place, 10.0 ** power
     return f"({value / scale:.{digits}f} ± {error / scale:.{digits}f})e{power:+03d}"
+
+
+def one_line(text: str) -> str:
+    """``text`` with every character that is not printable (newlines, control characters a
+    user may have typed) written as an escape, so that a message stays one line."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(text))
+
+
+def short_path(path, limit: int = 120) -> str:
+    """``path`` for a one-line message: as it is, or its start and end around "..." with its
+    length when longer than ``limit`` characters (a path of thousands of characters).
+
+    Examples
+    --------
+    >>> short_path("a" * 300, 20)
+    'aaaaaaa...aaaaaaa (300 characters)'
+    """
+    text = one_line(path)
+    if len(text) <= limit:
+        return text
+    half = (limit - 5) // 2
+    return f"{text[:half]}...{text[-half:]} ({len(text)} characters)"

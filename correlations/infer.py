@@ -689,6 +689,10 @@ def mean_velocity_from_gradient(dpdx_pa_m: float, diameter_um: float, eta_mpas: 
     gradient G = −dp/dx [Pa/m] in a tube of diameter d: U = G R²/(8η), R = d/2 (Hagen–
     Poiseuille), and its 1-σ error from those of G and d (default
     :data:`DEFAULT_RELATIVE_ERROR` × value; η taken as exact): δU/U = ((δG/G)² + (2δd/d)²)^(1/2).
+    Raises :class:`~lubrication.checks.InvalidParameterError` for a G, d or η that is not
+    positive and finite, an error that is negative, or a G whose U lies outside the velocity
+    range of :data:`correlations.estimate.PHYSICAL_BOUNDS` (named ``dpdx_pa_m``: the input
+    behind U).
 
     >>> round(mean_velocity_from_gradient(8.0e5, 4.0, 1.0)[0], 9)    # G R^2/(8 eta), mm/s
     0.4
@@ -697,10 +701,18 @@ def mean_velocity_from_gradient(dpdx_pa_m: float, diameter_um: float, eta_mpas: 
                         ("eta_mpas", eta_mpas)):
         check_range(name, value, 0.0, math.inf, lo_open=True, hi_open=True,
                     reason="a positive finite number")
+    _check_inputs({"dpdx_err": dpdx_err, "diameter_err": diameter_err})
     g_err = DEFAULT_RELATIVE_ERROR * dpdx_pa_m if dpdx_err is None else float(dpdx_err)
     d_err = DEFAULT_RELATIVE_ERROR * diameter_um if diameter_err is None else float(diameter_err)
     radius_m = 0.5 * diameter_um * 1e-6
     u = dpdx_pa_m * radius_m**2 / (8.0 * eta_mpas * 1e-3) * 1e3
+    lo, hi, why = PHYSICAL_BOUNDS["velocity_mm_s"]
+    if not lo <= u <= hi:
+        # the gradient is the input: the message names it, with the mean velocity it gives
+        raise InvalidParameterError(
+            "dpdx_pa_m", dpdx_pa_m, f"a gradient for which {lo:g} <= U <= {hi:g} mm/s",
+            f"U = G R^2/(8 eta) = {u:.4g} mm/s with d = {diameter_um:g} um and eta = "
+            f"{eta_mpas:g} mPa s; velocities {why}")
     return u, u * math.hypot(g_err / dpdx_pa_m, 2.0 * d_err / diameter_um)
 
 

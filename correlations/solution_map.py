@@ -95,6 +95,21 @@ pair ``|fine − coarse|`` for V/U, Δp⁺ and γ_max; none otherwise) propagate
 weights; None when a neighbour has none. ``model_error``: see the rule above (and the Ca_B clamp
 below). ``error`` = the sum of the known parts, in the quantity's units.
 
+Files read (what is refused)
+----------------------------
+Every file is read through :mod:`correlations.files` (a regular file, size, nesting depth and
+integer-length limits, strict JSON) and then checked against its schema: a point file
+(:func:`read_point`: coordinates in range, known method and status, ``success`` that agrees
+with the status, numbers or null where numbers are stored, a shape of number lists), the
+``build.json`` of a build folder and the grid of a packed map (:func:`_check_grid`: distinct
+values in range), and the packed map (:func:`_check_packed`: every column the queries read,
+one value of the right kind per node). A converged point whose quantity is missing, not finite
+or outside :data:`lubrication.checks.OUTPUT_BOUNDS` (:func:`_rejection`; e.g. V/U = 7, a
+negative film) is no node: :func:`pack_map` makes it a hole and lists it under ``rejected``,
+and :func:`load_map` refuses a packed map holding such a node, or no node at all. Failures
+raise :class:`~correlations.files.UnreadableFile` naming the option (``map``, ``folder``) and
+the file, which the command line answers with exit 2.
+
 Range (what is refused)
 -----------------------
 A quantity is None with its reason, never extrapolated, when the query lies outside the map's ν
@@ -116,9 +131,12 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from lubrication.checks import CannotPassError, InvalidParameterError, as_finite, check_positive
+from lubrication.checks import (CannotPassError, InvalidParameterError, as_finite, check_output,
+                                check_positive)
 from lubrication.io import atomic_write, clean_json
-from lubrication.results import status_of
+from lubrication.results import Status, status_of
+
+from .files import check_input_file, expect, read_json
 
 __all__ = ["FORMAT", "POINT_FORMAT", "POINT_GLOB", "QUANTITIES", "TRANSFORMS", "DEFAULT_MAP",
            "CA_B_CLAMP_MAX", "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
@@ -181,6 +199,134 @@ _AXES = ("lam", "nu", "ca")      # order of interpolation: lam (x = delta^1/2), 
 _ON_NODE = 1e-12                 # a coordinate this close (relative) to a node is that node
 
 
+# --------------------------------------------------------------------------- file schemas
+
+_METHODS = ("bem", "lubrication")
+_POINT_WHAT = "a point file of 'vesicle-tube map build'"
+_BUILD_WHAT = "a build folder of 'vesicle-tube map build' (build.json and point files)"
+_MAP_WHAT = "a packed map of 'vesicle-tube map pack'"
+
+#: The quantities of a map node held to :data:`lubrication.checks.OUTPUT_BOUNDS`, with the name
+#: of their bound (the tensions have none).
+_BOUNDED = {"V_over_U": "V_over_U", "dp_plus_R0": "dp_plus_R0", "ell": "ell", "film_min": "film"}
+
+
+def _number(v) -> bool:
+    """A finite JSON number (``true`` is no number; a literal such as 1e999 parses as inf)."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _numbers(v, nonempty: bool = False) -> bool:
+    """A list of finite numbers (non-empty if ``nonempty``)."""
+    return isinstance(v, list) and (bool(v) or not nonempty) and all(map(_number, v))
+
+
+def _show(v) -> str:
+    """A JSON value for a message: its repr, at most 40 characters."""
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+#: Kinds of the fields of a point file and of a packed map: (test, what the message expects).
+_KIND = {
+    "nu": (lambda v: _number(v) and 0.0 < v <= 1.0, "a number with 0 < nu <= 1"),
+    "lam_ratio": (lambda v: _number(v) and 0.0 < v < 1.0, "a number with 0 < lam_ratio < 1"),
+    "ca_b": (lambda v: _number(v) and v > 0.0, "a number > 0"),
+    "method": (lambda v: v in _METHODS, "'bem' or 'lubrication'"),
+    "success": (lambda v: isinstance(v, bool), "true or false"),
+    "status": (lambda v: v is None or v in tuple(s.value for s in Status),
+               "null or one of " + ", ".join(repr(s.value) for s in Status)),
+    "shape_class": (lambda v: v in (None, "bullet", "parachute"),
+                    "'bullet', 'parachute' or null"),
+    "text": (lambda v: v is None or isinstance(v, str), "text or null"),
+    "number": (lambda v: v is None or _number(v), "a finite number or null"),
+    "positive": (lambda v: v is None or (_number(v) and v > 0), "a number > 0 or null"),
+    "count": (lambda v: v is None or (isinstance(v, int) and not isinstance(v, bool) and v >= 0),
+              "an integer >= 0 or null"),
+    "object": (lambda v: v is None or isinstance(v, dict), "an object or null"),
+}
+
+#: The fields of a point file its readers use (packing, resuming a build, the figures), with
+#: their kinds; the first five are required, the others may be absent.
+_POINT_FIELDS = {"method": "method", "nu": "nu", "lam_ratio": "lam_ratio", "ca_b": "ca_b",
+                 "success": "success", "status": "status", "message": "text",
+                 "shape_class": "shape_class", "lam": "positive", "lam_c": "positive",
+                 **dict.fromkeys(QUANTITIES, "number"), "residual": "number",
+                 "bie_solves": "count", "seconds": "number", "error_estimate": "object",
+                 "shape": "object"}
+_REQUIRED = ("method", "nu", "lam_ratio", "ca_b", "success")
+
+
+def _schema(name: str, path, what: str):
+    """``check(condition, reason)``: :func:`correlations.files.expect` for one file."""
+    def check(condition: bool, reason: str) -> None:
+        expect(condition, name=name, path=path, what=what, reason=reason)
+    return check
+
+
+def _check_fields(data: dict, kinds: dict, check, where: str = "") -> None:
+    """Every field of ``kinds`` present in ``data`` is of its kind."""
+    for key, kind in kinds.items():
+        if key in data:
+            ok, expected = _KIND[kind]
+            check(ok(data[key]), f"the field '{where}{key}' is {_show(data[key])}, not "
+                                 f"{expected}")
+
+
+def _check_point(data, check) -> None:
+    """Schema of a point file: the header, the fields of :data:`_POINT_FIELDS`, the solver's
+    error estimates, the stored shape, and a ``success`` that agrees with ``status``."""
+    check(isinstance(data, dict) and data.get("format") == POINT_FORMAT,
+          "not a map point file (no 'format' header)")
+    for key in _REQUIRED:
+        check(key in data, f"point file without {key!r}")
+    _check_fields(data, _POINT_FIELDS, check)
+    _check_fields(data.get("error_estimate") or {}, dict.fromkeys(QUANTITIES, "number"), check,
+                  "error_estimate.")
+    shape = data.get("shape")
+    if shape is not None:
+        check(_numbers(shape.get("modes"), nonempty=True) and _numbers(shape.get("density")),
+              "the field 'shape' has no lists of numbers 'modes' and 'density'")
+        check(data.get("lam") is not None, "a point with a 'shape' has no 'lam'")
+    status = data.get("status")
+    check(status is None or data["success"] == (status == Status.CONVERGED.value),
+          f"'success' {data['success']} contradicts 'status' {status!r}")
+
+
+def _check_grid(grid, check) -> None:
+    """Schema of a grid (of ``build.json`` or of a packed map): distinct known methods, and
+    non-empty lists of distinct values in range for ν, Ca_B and each method's λ/λc."""
+    check(isinstance(grid, dict), "no 'grid' object")
+    methods = grid.get("methods")
+    check(isinstance(methods, list) and bool(methods) and all(m in _METHODS for m in methods)
+          and len(set(methods)) == len(methods),
+          "'grid.methods' is not a non-empty list of distinct 'bem', 'lubrication'")
+    ratios = grid.get("lam_ratio")
+    check(isinstance(ratios, dict) and all(m in ratios for m in methods),
+          "'grid.lam_ratio' is not an object with a list for each method")
+    for field_, values in [("nu", grid.get("nu")), ("ca_b", grid.get("ca_b"))] + [
+            (f"lam_ratio.{m}", ratios[m]) for m in methods]:
+        ok, expected = _KIND[field_.split(".")[0]]
+        check(isinstance(values, list) and bool(values) and all(map(ok, values)),
+              f"'grid.{field_}' is not a non-empty list of values, each {expected}")
+        check(len({round(v, 9) for v in values}) == len(values), f"'grid.{field_}' repeats a "
+              "value")
+
+
+def _rejection(point: dict) -> str:
+    """Why a converged point (a stored point, or a row of a packed map) cannot be a map node
+    ('' if it can): a quantity of :data:`QUANTITIES` missing or not finite, or outside its
+    physical bound (:data:`_BOUNDED`, :func:`lubrication.checks.check_output`)."""
+    for q in QUANTITIES:
+        v = point.get(q)
+        if not _number(v):
+            return f"{q} = {_show(v)} is not a finite number"
+        why = check_output(_BOUNDED[q], float(v), {}) if q in _BOUNDED else ""
+        if why:
+            return why if _BOUNDED[q] == q else f"{q}: {why}"
+    return ""
+
+
 # --------------------------------------------------------------------------- points on disk
 
 def _num(x) -> str:
@@ -201,38 +347,25 @@ def point_filename(method: str, nu: float, lam_ratio: float, ca_b: float) -> str
     return f"{method}_nu{_num(nu)}_lr{_num(lam_ratio)}_caB{_num(ca_b)}.json"
 
 
-def _bad_file(path, reason: str) -> InvalidParameterError:
-    return InvalidParameterError("map", str(path), "a file written by 'vesicle-tube map "
-                                 "build' or 'vesicle-tube map pack'", reason)
-
-
-def read_point(path) -> dict:
-    """One stored point (a dict), checked to be a point file; raises
-    :class:`~lubrication.checks.InvalidParameterError` (name ``map``) otherwise. Its
-    ``"status"`` is a :class:`lubrication.results.Status` value: the stored one, or for a point
-    file without one, the status :func:`lubrication.results.status_of` derives from
-    ``success`` and ``message``."""
-
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise _bad_file(path, f"unreadable point file ({exc})") from None
-    if not isinstance(data, dict) or data.get("format") != POINT_FORMAT:
-        raise _bad_file(path, "not a map point file")
-    for key in ("method", "nu", "lam_ratio", "ca_b", "success"):
-        if key not in data:
-            raise _bad_file(path, f"point file without {key!r}")
-    try:
-        data["status"] = status_of(data).value
-    except ValueError:
-        raise _bad_file(path, f"unknown status {data['status']!r}") from None
+def read_point(path, name: str = "folder") -> dict:
+    """One stored point (a dict), read by :func:`correlations.files.read_json` and checked
+    against the point schema (:func:`_check_point`); raises
+    :class:`~correlations.files.UnreadableFile` naming ``name`` (the option or parameter that
+    gave the build folder) and the file otherwise. Its ``"status"`` is a
+    :class:`lubrication.results.Status` value: the stored one, or for a point file without
+    one, the status :func:`lubrication.results.status_of` derives from ``success`` and
+    ``message``."""
+    data = read_json(path, name=name, what=_POINT_WHAT)
+    _check_point(data, _schema(name, path, _POINT_WHAT))
+    data["status"] = status_of(data).value
     return data
 
 
-def read_points(folder) -> list[dict]:
-    """Every stored point of a build folder (files named like :func:`point_filename`)."""
+def read_points(folder, name: str = "folder") -> list[dict]:
+    """Every stored point of a build folder (files named like :func:`point_filename`), each
+    read by :func:`read_point` (``name``: the option that gave the folder)."""
     folder = Path(folder)
-    return [read_point(p) for p in sorted(folder.glob(POINT_GLOB))
+    return [read_point(p, name) for p in sorted(folder.glob(POINT_GLOB))
             if not p.name.startswith(".")]
 
 
@@ -656,69 +789,79 @@ class MapQuery:
 
 # --------------------------------------------------------------------------- load
 
-def _check_packed(data, path) -> None:
-    """Raise if ``data`` is not a well-formed packed map."""
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise _bad_file(path, "not a vesicle-tube solution map (no 'format' header)")
-    if data.get("version") != FORMAT_VERSION:
-        raise _bad_file(path, f"map format version {data.get('version')!r}; this version "
-                              f"reads {FORMAT_VERSION}")
-    grid, cols = data.get("grid"), data.get("columns")
-    if not isinstance(grid, dict) or not isinstance(cols, dict):
-        raise _bad_file(path, "no grid or columns")
-    if data.get("transforms") != TRANSFORMS:
-        # its leave-one-out errors are in other interpolation variables than this version's
-        raise _bad_file(path, "packed with other interpolation variables than this version "
-                              "uses: pack it again with 'vesicle-tube map pack'")
-    try:
-        methods = list(grid["methods"])
-        if not set(methods) <= {"bem", "lubrication"} or not methods:
-            raise ValueError(f"methods {methods}")
-        for name in ("nu", "ca_b"):
-            as_finite(name, grid[name])
-            if not grid[name]:
-                raise ValueError(f"empty {name}")
-        for m in methods:
-            as_finite("lam_ratio", grid["lam_ratio"][m])
-    except (KeyError, TypeError, ValueError) as exc:
-        raise _bad_file(path, f"malformed grid ({exc})") from None
+def _check_packed(data, check) -> None:
+    """Schema of a packed map: the header, the grid, every column the queries read (one value
+    per node, each of its kind), every node inside the physical bounds (:func:`_rejection`),
+    at least one node, and the holes."""
+    check(isinstance(data, dict) and data.get("format") == FORMAT,
+          "not a vesicle-tube solution map (no 'format' header)")
+    version = data.get("version")
+    check(type(version) is int and version == FORMAT_VERSION,
+          f"map format version {_show(version)}; this version reads {FORMAT_VERSION} (an "
+          "integer)")
+    # its leave-one-out errors are in other interpolation variables than this version's
+    check(json.dumps(data.get("transforms"), sort_keys=True)
+          == json.dumps(TRANSFORMS, sort_keys=True), "packed with other interpolation "
+          "variables than this version uses: pack it again with 'vesicle-tube map pack'")
+    _check_grid(data.get("grid"), check)
+    check(isinstance(data.get("provenance", {}), dict), "'provenance' is not an object")
+    cols = data.get("columns")
+    check(isinstance(cols, dict), "no 'columns' object")
     needed = ["method", "nu", "lam_ratio", "ca_b", "shape_class", *QUANTITIES]
     missing = [c for c in needed if c not in cols]
-    if missing:
-        raise _bad_file(path, "missing columns " + ", ".join(missing))
-    lengths = {len(v) if isinstance(v, list) else -1 for v in cols.values()}
-    if len(lengths) != 1 or -1 in lengths:
-        raise _bad_file(path, "columns of unequal length")
-    for c in ("nu", "lam_ratio", "ca_b", *QUANTITIES):
-        if any(v is not None and not isinstance(v, (int, float)) for v in cols[c]):
-            raise _bad_file(path, f"non-numeric value in column {c!r}")
+    check(not missing, "missing columns " + ", ".join(missing))
+    check(all(isinstance(v, list) for v in cols.values()), "a column is not a list")
+    n = len(cols["nu"])
+    check(all(len(v) == n for v in cols.values()), "columns of unequal length")
+    kinds = {"method": "method", "nu": "nu", "lam_ratio": "lam_ratio", "ca_b": "ca_b",
+             "shape_class": "shape_class", "lam": "positive", "residual": "number",
+             "bie_solves": "count", "seconds": "number", **dict.fromkeys(QUANTITIES, "number"),
+             **{c: "number" for c in cols if c.startswith(("err_", "loo_"))}}
+    for c, kind in kinds.items():
+        ok, expected = _KIND[kind]
+        bad = next((i for i, v in enumerate(cols.get(c, ())) if not ok(v)), None)
+        check(bad is None, f"column {c!r}, row {bad}: "
+                           f"{_show(None if bad is None else cols[c][bad])} is not {expected}")
+    for i in range(n):
+        row = {c: cols[c][i] for c in QUANTITIES}
+        why = _rejection(row)
+        check(not why, f"the node of row {i} ({cols['method'][i]}, nu={cols['nu'][i]:g}, "
+                       f"lam/lam_c={cols['lam_ratio'][i]:g}, Ca_B={cols['ca_b'][i]:g}) is "
+                       f"unphysical: {why}")
+    holes = data.get("holes", [])
+    check(isinstance(holes, list), "'holes' is not a list")
+    for i, h in enumerate(holes):
+        check(isinstance(h, dict) and all(k in h for k in ("method", "nu", "lam_ratio", "ca_b",
+                                                            "reason")),
+              f"hole {i} is not an object with method, nu, lam_ratio, ca_b and reason")
+        _check_fields(h, {"method": "method", "nu": "nu", "lam_ratio": "lam_ratio",
+                          "ca_b": "ca_b", "reason": "text"}, check, f"holes[{i}].")
+    check(n > 0, f"the map has no node: no grid point converged ({len(holes)} holes: failed, "
+                 "rejected or not computed); expected at least one converged point")
 
 
 @functools.lru_cache(maxsize=8)
-def _load(path: str, mtime: float) -> SolutionMap:
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-        data = json.loads(text)
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise _bad_file(path, f"unreadable ({exc})") from None
-    _check_packed(data, path)
+def _load(path: str, mtime_ns: int, size: int) -> SolutionMap:
+    """The map at ``path`` (the file as it is at ``mtime_ns`` and ``size``: the cache key)."""
+    data = read_json(path, name="map", what=_MAP_WHAT)
+    _check_packed(data, _schema("map", path, _MAP_WHAT))
     return SolutionMap(data, path)
 
 
 def load_map(path=None) -> SolutionMap:
     """The packed map at ``path`` (default :data:`DEFAULT_MAP`), cached while the file is
-    unchanged. Raises :class:`~lubrication.checks.InvalidParameterError` (name ``map``) for a
-    missing, corrupt or foreign file; "no map shipped" when the default is absent."""
-    p = Path(DEFAULT_MAP if path is None else path)
-    try:
-        mtime = os.stat(p).st_mtime
-    except OSError:
-        if path is None:
-            raise InvalidParameterError(
-                "map", str(p), "a packed map", "no map shipped with this installation: build "
-                "one with 'vesicle-tube map build' and give it with --map") from None
-        raise _bad_file(p, "no such file") from None
-    return _load(str(p), mtime)
+    unchanged. Read by :func:`correlations.files.read_json` (a regular file, size, depth and
+    integer limits) and checked by :func:`_check_packed`; raises
+    :class:`~correlations.files.UnreadableFile` (name ``map``) for a missing, unreadable,
+    malformed or foreign file, or one whose nodes are unphysical; "no map shipped" when the
+    default is absent."""
+    if path is None and not DEFAULT_MAP.exists():
+        raise InvalidParameterError(
+            "map", str(DEFAULT_MAP), "a packed map", "no map shipped with this installation: "
+            "build one with 'vesicle-tube map build' and give it with --map")
+    p = check_input_file(DEFAULT_MAP if path is None else path, name="map", what=_MAP_WHAT)
+    st = os.stat(p)
+    return _load(str(p), st.st_mtime_ns, st.st_size)
 
 
 # --------------------------------------------------------------------------- query
@@ -802,31 +945,45 @@ def pack_map(folder, out=None) -> Path:
 
     The file holds ``grid``, ``parameters`` and ``provenance`` (from ``build.json``), the
     ``units`` of every column, ``columns`` (the converged points, one list per column, no
-    shapes), ``holes`` (failed or missing grid points with their reasons) and the LOO errors
-    ``loo_<axis>_<q>`` (see the module docstring).
+    shapes), ``holes`` (failed, rejected or missing grid points with their reasons), the LOO
+    errors ``loo_<axis>_<q>`` (see the module docstring) and ``rejected``: the converged
+    points left out as unphysical (:func:`_rejection`: a quantity missing, not finite or
+    outside :data:`lubrication.checks.OUTPUT_BOUNDS`), each with its coordinates and reason;
+    they are holes too (reason "rejected: ..."). ``build.json`` and every point file are read
+    through :mod:`correlations.files` and checked against their schemas; a file that fails
+    raises :class:`~correlations.files.UnreadableFile` (name ``folder``) before anything is
+    written. A folder without a converged point packs into a map of holes only, which
+    :func:`load_map` refuses (it names what failed; ``map build`` packs at its end whatever
+    its points gave).
     """
     folder = Path(folder)
-    try:
-        build = json.loads((folder / "build.json").read_text(encoding="utf-8"))
-        grid = build["grid"]
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise InvalidParameterError("folder", str(folder), "a build folder of 'vesicle-tube "
-                                    "map build' (with build.json)", str(exc)) from None
+    build = read_json(folder / "build.json", name="folder", what=_BUILD_WHAT)
+    check = _schema("folder", folder / "build.json", _BUILD_WHAT)
+    check(isinstance(build, dict), "build.json is not a JSON object")
+    _check_grid(build.get("grid"), check)
+    for key in ("parameters", "provenance"):
+        check(isinstance(build.get(key, {}), dict), f"the field {key!r} is not an object")
+    grid = build["grid"]
     stored = {_key(p["nu"], p["lam_ratio"], p["ca_b"]) + (p["method"],): p
               for p in read_points(folder)}
     errors = sorted({f"err_{q}" for p in stored.values()
                      for q in (p.get("error_estimate") or {}) if q in QUANTITIES})
     names = [*_BASE_COLUMNS, *QUANTITIES, *errors]
     cols = {c: [] for c in names}
-    holes = []
+    holes, rejected = [], []
     for method in grid["methods"]:
         for nu in grid["nu"]:
             for ca in grid["ca_b"]:
                 for r in grid["lam_ratio"][method]:
                     p = stored.get(_key(nu, r, ca) + (method,))
+                    where = {"method": method, "nu": nu, "lam_ratio": r, "ca_b": ca}
+                    why = p is not None and p["success"] and _rejection(p)
+                    if why:
+                        rejected.append({**where, "reason": why})
+                        holes.append({**where, "reason": f"rejected: {why}"})
+                        continue
                     if p is None or not p["success"]:
-                        holes.append({"method": method, "nu": nu, "lam_ratio": r, "ca_b": ca,
-                                      "reason": "not computed" if p is None else
+                        holes.append({**where, "reason": "not computed" if p is None else
                                       (p.get("message") or "failed")})
                         continue
                     est = p.get("error_estimate") or {}
@@ -841,7 +998,8 @@ def pack_map(folder, out=None) -> Path:
              **{e: f"solver error estimate of {e[4:]} (same units)" for e in errors}}
     data = {"format": FORMAT, "version": FORMAT_VERSION, "grid": grid,
             "parameters": build.get("parameters", {}), "provenance": build.get("provenance", {}),
-            "transforms": TRANSFORMS, "units": units, "columns": cols, "holes": holes}
+            "transforms": TRANSFORMS, "units": units, "columns": cols, "holes": holes,
+            "rejected": rejected}
     loo = SolutionMap(data, str(folder)).leave_one_out()
     data["columns"].update(loo)
     data["units"].update({k: f"leave-one-out error of {k.split('_', 2)[2]} along "

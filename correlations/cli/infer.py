@@ -21,7 +21,12 @@ OPTIONS = {"v_mm_s": "--v-mm-s", "v_over_u": "--v-over-u", "length_um": "--lengt
            "dpdx_pa_m": "--dpdx-pa-m",
            "kappa_j": "--kappa-j", "v_err": "--v-err", "length_err": "--length-err",
            "diameter_err": "--diameter-err", "u_err": "--u-err", "map": "--map",
-           "samples": "--samples"}
+           "samples": "--samples", "dpdx_err": "--dpdx-err"}
+#: U and its error computed from the pressure gradient (``--dpdx-pa-m``) come from that option
+#: and ``--dpdx-err``, not from ``--u-mm-s`` and ``--u-err``: a message about them names those
+#: (``options_named`` would otherwise mark the untyped ``--u-mm-s`` "(default)", an option
+#: that has no default)
+FROM_GRADIENT = {"u_mm_s": "--dpdx-pa-m", "u_err": "--dpdx-err"}
 
 #: rows of the table, in order, with their labels
 ROWS = (("nu", "reduced volume nu"), ("lam", "confinement lam = R0/R"),
@@ -37,7 +42,8 @@ ROWS = (("nu", "reduced volume nu"), ("lam", "confinement lam = R0/R"),
 def cmd_infer(args):
     from correlations.infer import (  # lazy: correlations.infer off the estimate's start-up
         infer_cell, mean_velocity_from_gradient)
-    with options_named(OPTIONS, args):
+    from_gradient = FROM_GRADIENT if args.dpdx_pa_m is not None else {}
+    with options_named({**OPTIONS, **from_gradient}, args):
         u_mm_s, u_err = args.u_mm_s, args.u_err
         if args.dpdx_pa_m is not None:
             if args.eta_mpas is None:

@@ -126,3 +126,57 @@ def test_a_map_without_the_figures_nodes_is_refused_before_any_work(tmp_path, mo
     err = capsys.readouterr().err
     assert "--map" in err and "nu = 0.6" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_a_map_with_holes_where_the_statements_read_answers_not_checked(tmp_path):
+    """A map of our own build with the figures' nu nodes at Ca_B = 50 but holes where the
+    statements read (nu = 0.6 at lam/lam_c = 0.2, lam/lam_c = 0.9999 but for nu = 0.98): the
+    figures are drawn and those statements say "not checked" and what the map lacks; never an
+    exception (the figure functions are called without writing the files, which is what
+    makes the command's time)."""
+    from test_readers import FAILED, build
+
+    from correlations.figures import FIGURES, FigureContext
+    nus = [0.6, 0.7, 0.8, 0.9, 0.98]
+    holes = {(0.6, 0.2, 50.0): FAILED, **{(nu, 0.9999, 50.0): FAILED for nu in nus[:-1]}}
+    path = build(tmp_path / "b", nus, [0.2, 0.45, 0.9999], [50.0], outcome=holes)
+    ctx = FigureContext(tmp_path / "figs", map_path=path)
+    unchecked = []
+    for name in ("speed", "pressure", "film_ca", "dp_scalings"):
+        _, rows, _ = FIGURES[name][1](ctx)
+        assert rows and {r.verdict for r in rows} <= {"agree", "disagree", "not checked"}
+        unchecked += [r for r in rows if r.verdict == "not checked"]
+    assert {r.figure for r in unchecked} == {"speed", "pressure", "film_ca", "dp_scalings"}
+    assert all(r.note.startswith("the map has no ") and r.ours == "—" for r in unchecked)
+    assert any("λ < 0.5 at ν = 0.6" in r.note for r in unchecked)
+
+
+@pytest.mark.parametrize("damage", ["truncated", "edited data", "5000-digit integer", "fifo"])
+def test_a_damaged_cache_file_is_ignored_and_recomputed(tmp_path, damage):
+    """The cache is ours: a file that cannot be read or whose data fail their checksum is
+    reported, recomputed and rewritten, never fatal; an intact one is read back."""
+    from correlations.figures import FigureContext
+    said = []
+    ctx = FigureContext(tmp_path, progress=said.append)
+    calls = []
+
+    def compute():
+        calls.append(1)
+        return {"values": [1.0, 2.5], "n": 3}
+    data, cached = ctx.cached("probe", {"a": 1}, compute)
+    assert (data, cached, len(calls)) == ({"values": [1.0, 2.5], "n": 3}, False, 1)
+    (path,) = (tmp_path / "cache").glob("probe-*.json")
+    text = path.read_text()
+    path.unlink()
+    if damage == "truncated":
+        path.write_text(text[: len(text) // 2])
+    elif damage == "edited data":
+        path.write_text(text.replace("2.5", "7.5"))
+    elif damage == "5000-digit integer":
+        path.write_text(text.replace('"n": 3', '"n": 3' + "0" * 5000))
+    else:
+        os.mkfifo(path)
+    data, cached = ctx.cached("probe", {"a": 1}, compute)
+    assert (data, cached, len(calls)) == ({"values": [1.0, 2.5], "n": 3}, False, 2)
+    assert len(said) == 1 and "ignored" in said[0] and path.name in said[0]
+    assert ctx.cached("probe", {"a": 1}, compute) == (data, True) and len(calls) == 2

@@ -189,3 +189,20 @@ def test_a_map_of_one_node_is_refused_naming_map(tmp_path, monkeypatch, capsys):
                  "--u-mm-s", "1", "--map", packed]) == 2
     err = capsys.readouterr().err
     assert "--map" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("extra, option, words", [
+    # U = G R^2/(8 eta) = 1e12 Pa/m (3e-6 m)^2 / (8e-3 Pa s) = 1.125e3 m/s, above 1 km/s
+    (["--dpdx-pa-m", "1e12"], "--dpdx-pa-m", "U = G R^2/(8 eta) = 1.125e+06 mm/s"),
+    (["--dpdx-pa-m", "1e-9"], "--dpdx-pa-m", "U = G R^2/(8 eta) = 1.125e-15 mm/s"),
+    (["--dpdx-pa-m", "1e5", "--dpdx-err", "-5"], "--dpdx-err", "dpdx_err=-5"),
+    (["--dpdx-pa-m", "1e5", "--diameter-err", "-1"], "--diameter-err", "diameter_err=-1"),
+])
+def test_errors_of_the_velocity_from_the_gradient_name_the_options_typed(cli_usage_error, extra,
+                                                                         option, words):
+    """U derived from --dpdx-pa-m: a message about it names that option (and --dpdx-err for
+    its error), never the untyped --u-mm-s marked "(default)" (it has no default)."""
+    line = cli_usage_error("infer", "--v-mm-s", "1.2", "--length-um", "8", "--diameter-um", "6",
+                           "--eta-mpas", "1", *extra)
+    assert f"error: {option}:" in line and words in line, line
+    assert "(default)" not in line and "u_mm_s" not in line and "--u-mm-s" not in line

@@ -13,6 +13,7 @@ import math
 
 import pytest
 
+from lubrication.geometry import critical_confinement
 from correlations import map_build
 from correlations.map_build import build_map, line_tasks, make_grid
 from correlations.solution_map import (POINT_FORMAT, QUANTITIES, TRANSFORMS, load_map, pack_map,
@@ -53,7 +54,8 @@ def truth(q, nu, r, ca):
     power = {"V_over_U": -1.0, "dp_plus_R0": 1.0, "ell": 0.0, "film_min": -1.0,
              "tension_max": 1.5, "tension_front": 1.5, "wall_shear_max": 1.0}[q]
     ratio_power = {"dp_plus_R0": 6.0, "ell": 1.0}.get(q, 0.0)
-    scale = {"V_over_U": 1.0, "film_min": 1.0, "ell": 3.0}.get(q, 10.0)
+    # V/U - 1 and h/R at most 0.7 on the grid: inside the physical bounds a node must meet
+    scale = {"V_over_U": 0.2, "film_min": 0.2, "ell": 3.0}.get(q, 10.0)
     return (1.0 if q == "V_over_U" else 0.0) + scale * math.exp(g) * d ** -power * r**ratio_power
 
 
@@ -209,7 +211,9 @@ def _fake_solver(nu, lam_ratio, ca_b, warm, options, max_time):
     CALLS.append((nu, lam_ratio, ca_b, None if warm is None else
                   ((warm["nu"], warm["lam_ratio"]) if isinstance(warm, dict) else warm)))
     ok = nu != 0.85
+    lam_c = float(critical_confinement(nu))
     fields = {"success": ok, "message": "ok" if ok else "did not converge",
+              "lam": lam_ratio * lam_c, "lam_c": lam_c,
               **{q: (truth(q, nu, lam_ratio, ca_b) if ok else None) for q in QUANTITIES},
               "shape_class": "bullet" if ok else None,
               "error_estimate": dict.fromkeys(QUANTITIES), "residual": 0.0,
