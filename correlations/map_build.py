@@ -38,14 +38,30 @@ local pool; cores // task threads of the host's Dask workers, :func:`_share_core
 Resource envelope: a point takes 0.1–3 s (lubrication) to minutes (BEM near λc); ``max_time``
 bounds each point (an expired point is stored as failed with the reason). The default grid has
 9 ν × (13 BEM + 11 lubrication λ/λc) × 7 Ca_B = 1512 points in 154 lines (63 lubrication, 91
-BEM); each point file stores its solve time (``seconds``), so a build's cost is their sum.
+BEM); each point file stores its solve time (``seconds``), so a build's cost is their sum. A grid
+holds at most :data:`MAX_POINTS` points, and a local pool at most one worker per core.
+
+Input checks: before the folder is touched, every grid point and solver option is checked by
+the check of the solver that will solve it (:func:`check_build`: the ranges of ``vesicle-tube
+bem vesicle`` and ``vesicle-tube lubrication``), so that a value the solver refuses is an error
+of the build, not a folder of failed points; a folder whose ``build.json`` records values the
+solvers now refuse is reported, not resumed.
+
+One build per folder: a build holds an advisory lock (``fcntl.flock``) on :data:`LOCK_NAME` in
+its folder from before it reads ``build.json`` to after the pack, with its process id in the
+file; a second build into the folder is refused at once. The kernel releases the lock when the
+process ends in any way (kill -9 included); pool workers close their inherited copy of it, so
+they never hold it for a dead build.
 """
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import datetime
+import fcntl
 import fnmatch
+import inspect
 import json
 import logging
 import math
@@ -57,16 +73,18 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from lubrication.checks import InvalidParameterError, check_range
+from lubrication.checks import Deadline, InvalidParameterError, check_range
 from lubrication.geometry import critical_confinement
 from lubrication.io import provenance as run_provenance
 from lubrication.io import write_json
 from lubrication.results import Status, leading_status, status_of
 
+from .files import UnreadableFile, expect, read_json
 from .solution_map import (POINT_FORMAT, POINT_GLOB, QUANTITIES, pack_map, point_filename,
-                           read_points)
+                           read_point, read_points)
 
-__all__ = ["DEFAULT_GRID", "DEFAULT_OPTIONS", "METHODS", "SOLVERS", "make_grid", "line_tasks",
+__all__ = ["DEFAULT_GRID", "DEFAULT_OPTIONS", "LOCK_NAME", "MAX_POINTS", "METHODS", "SOLVERS",
+           "BuildInputError", "make_grid", "check_build", "max_workers", "line_tasks",
            "solve_line", "build_map"]
 
 log = logging.getLogger(__name__)
@@ -94,6 +112,14 @@ DEFAULT_GRID = {
 #: empty BEM set means its automatic refinement at the solver's default tolerances.
 DEFAULT_OPTIONS = {"bem": {}, "lubrication": {"tol": 1e-7}}
 
+#: Most points of one build: 13 times the default grid (1512 points, packed in 2 s into
+#: 0.6 MB, docs/data/bench_solution_map.json). The pack holds every point in memory and its
+#: leave-one-out errors grow with the count; a larger map is several builds, or an extension.
+MAX_POINTS = 20_000
+
+#: The lock file of a build in its folder (module docstring: one build per folder).
+LOCK_NAME = ".vesicle-tube-build.lock"
+
 
 # --------------------------------------------------------------------------- grid
 
@@ -101,8 +127,10 @@ def make_grid(nu=None, lam_ratio=None, ca_b=None, methods=None) -> dict:
     """The build grid: :data:`DEFAULT_GRID` with the given lists replacing its own.
 
     ``lam_ratio`` is a list (the same λ/λc for every method) or a dict ``{method: list}``.
-    Values are checked (0 < ν < 1, 0 < λ/λc < 1, Ca_B > 0, methods from :data:`METHODS`),
-    sorted and de-duplicated.
+    Values are checked (0 < ν < 1, 0 < λ/λc < 1, Ca_B > 0, methods from :data:`METHODS`, at
+    most :data:`MAX_POINTS` points in all), sorted and de-duplicated; an error about a list of
+    the dict is named ``lam_ratio_<method>``. Whether the solvers accept every point is
+    :func:`check_build`'s question.
     """
     methods = list(DEFAULT_GRID["methods"] if methods is None else methods)
     if not methods:
@@ -113,20 +141,37 @@ def make_grid(nu=None, lam_ratio=None, ca_b=None, methods=None) -> dict:
     methods = [m for m in METHODS if m in methods]
 
     def values(name, given, default, lo, hi, hi_open=True):
-        v = default if given is None else given
-        arr = check_range(name, [float(x) for x in v], lo, hi, lo_open=True, hi_open=hi_open)
-        if arr.size == 0:
+        v = [float(x) for x in (default if given is None else given)]
+        if not v:
             raise InvalidParameterError(name, "[]", "a non-empty list")
-        return sorted({float(x) for x in arr})
+        for x in v:                      # one by one: the message names the value
+            check_range(name, x, lo, hi, lo_open=True, hi_open=hi_open)
+        return sorted(set(v))
 
     ratios = {}
     for m in methods:
-        given = lam_ratio.get(m) if isinstance(lam_ratio, dict) else lam_ratio
-        ratios[m] = values("lam_ratio", given, DEFAULT_GRID["lam_ratio"][m], 0.0, 1.0)
-    return {"methods": methods,
+        per_method = isinstance(lam_ratio, dict)
+        given = lam_ratio.get(m) if per_method else lam_ratio
+        ratios[m] = values(f"lam_ratio_{m}" if per_method else "lam_ratio", given,
+                           DEFAULT_GRID["lam_ratio"][m], 0.0, 1.0)
+    grid = {"methods": methods,
             "nu": values("nu", nu, DEFAULT_GRID["nu"], 0.0, 1.0),
             "lam_ratio": ratios,
             "ca_b": values("ca_b", ca_b, DEFAULT_GRID["ca_b"], 0.0, math.inf)}
+    total = _count(grid)
+    if total > MAX_POINTS:
+        sizes = " + ".join(f"{len(ratios[m])} {m}" for m in methods)
+        raise InvalidParameterError(
+            "grid", total, f"at most {MAX_POINTS} points",
+            f"{len(grid['nu'])} nu x ({sizes} lam/lam_c) x {len(grid['ca_b'])} Ca_B; build "
+            "it in parts (a build extends to a grid that contains its own)")
+    return grid
+
+
+def _count(grid: dict) -> int:
+    """Number of points of a grid."""
+    return (sum(len(grid["lam_ratio"][m]) for m in grid["methods"]) * len(grid["nu"])
+            * len(grid["ca_b"]))
 
 
 def _contains(grid: dict, other: dict) -> bool:
@@ -136,6 +181,87 @@ def _contains(grid: dict, other: dict) -> bool:
             and set(other["nu"]) <= set(grid["nu"]) and set(other["ca_b"]) <= set(grid["ca_b"])
             and all(set(other["lam_ratio"][m]) <= set(grid["lam_ratio"][m])
                     for m in other["methods"]))
+
+
+# --------------------------------------------------------------------------- input checks
+
+class BuildInputError(InvalidParameterError):
+    """A grid value or solver option of a build that the solver of its lines refuses: the
+    solver's own error, named for the build (``lam_ratio`` -> ``lam_ratio_bem``, a solver option
+    ``tol`` -> ``bem_tol``; ``nu``, ``ca_b`` and ``max_time`` keep their names) and saying which
+    lines hold the value (``method``)."""
+
+    def __init__(self, method: str, exc: InvalidParameterError):
+        name = exc.name
+        if name in ("lam", "lam_ratio"):
+            name = f"lam_ratio_{method}"
+        elif name not in ("nu", "ca_b", "max_time"):
+            name = f"{method}_{name}"
+        self.name, self.value, self.valid, self.method = name, exc.value, exc.valid, method
+        ValueError.__init__(self, f"{exc} (a value of the {method} lines of the build)")
+
+
+def _bem_option_names() -> tuple:
+    """The solver options of the BEM lines: those :func:`bem.vesicle.check_vesicle_inputs`
+    checks besides the point and ``max_time`` (the build sets those)."""
+    from bem.vesicle import check_vesicle_inputs  # lazy: bem and scipy off the build's start-up
+    return tuple(k for k, p in inspect.signature(check_vesicle_inputs).parameters.items()
+                 if p.default is not inspect.Parameter.empty
+                 and k not in ("lam", "lam_ratio", "ca_b", "max_time"))
+
+
+def _check_bem_point(nu, lam_ratio, ca_b, options, max_time) -> None:
+    """The check of ``vesicle-tube bem vesicle`` (:func:`bem.vesicle.check_vesicle_inputs`)."""
+    from bem.vesicle import check_vesicle_inputs  # lazy: bem and scipy off the build's start-up
+    check_vesicle_inputs(nu, lam_ratio=lam_ratio, ca_b=ca_b, max_time=max_time, **options)
+
+
+def _check_lubrication_point(nu, lam_ratio, ca_b, options, max_time) -> None:
+    """The check of ``vesicle-tube lubrication`` (:func:`lubrication.solve.check_inputs`), and
+    the tolerance's range."""
+    from lubrication.solve import TOL_RANGE, check_inputs  # lazy: scipy off the start-up
+    check_inputs(nu, lam_ratio=lam_ratio, ca_b=ca_b)
+    if "tol" in options:
+        check_range("tol", options["tol"], *TOL_RANGE,
+                    reason="solve_bvp's relative residual tolerance")
+
+
+#: method -> (check of one point ``f(nu, lam_ratio, ca_b, options, max_time)``, the names of
+#: the solver options the build accepts for it)
+POINT_CHECKS = {"bem": (_check_bem_point, _bem_option_names),
+                "lubrication": (_check_lubrication_point, lambda: ("tol",))}
+
+
+def check_build(grid: dict, options: dict, max_time=None) -> None:
+    """Check a build before any work: ``max_time`` (> 0 or None), the solver options of each
+    method of the grid (names the build accepts, values in the solver's range) and every point
+    of the grid against the check of the solver that will solve it, the same checks as the
+    single-point commands. Raises :class:`BuildInputError` (an
+    :class:`~lubrication.checks.InvalidParameterError`) naming the value."""
+    if max_time is not None:
+        Deadline(max_time)                               # 0 < max_time < inf
+    for method in grid["methods"]:
+        check_point, names = POINT_CHECKS[method]
+        given = options.get(method, {})
+        accepted = names()
+        for key in given:
+            if key not in accepted:
+                raise InvalidParameterError(f"options.{method}", key,
+                                            "one of " + ", ".join(accepted))
+        try:
+            for nu in grid["nu"]:
+                for ca in grid["ca_b"]:
+                    for r in grid["lam_ratio"][method]:
+                        check_point(nu, r, ca, given, max_time)
+        except InvalidParameterError as exc:
+            raise BuildInputError(method, exc) from None
+
+
+def max_workers() -> int:
+    """Most local worker processes: one per core (``os.cpu_count``). The lines are CPU-bound,
+    so more processes only share the cores, each holding its own solvers (a BEM line up to
+    about 1 GB, :mod:`bem.vesicle`'s resource envelope)."""
+    return os.cpu_count() or 1
 
 
 def line_tasks(grid: dict) -> list[tuple[str, float, list[tuple[float, float]]]]:
@@ -300,11 +426,16 @@ def _point(method, nu, lam_ratio, ca_b, warm, options, max_time, provenance):
 PR_SET_PDEATHSIG = 1
 
 
-def _init_worker(parent: int) -> None:
+def _init_worker(parent: int, lock_fd: int | None = None) -> None:
     """A pool worker ignores Ctrl-C (the parent stops its workers; a terminal sends SIGINT to
     all) and dies with its parent, also when the parent is killed (SIGKILL leaves it no chance
     to stop them): on Linux the kernel kills the worker then (``PR_SET_PDEATHSIG``); a parent
-    already gone when the worker starts ends it at once."""
+    already gone when the worker starts ends it at once. A forked worker closes its copy of
+    the build lock's descriptor ``lock_fd`` (a lock lasts while any copy is open; closing a
+    copy does not release it), so that only the build holds the lock."""
+    if lock_fd is not None:
+        with contextlib.suppress(OSError):
+            os.close(lock_fd)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     if sys.platform.startswith("linux"):
         ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL))
@@ -400,6 +531,87 @@ def _stop(executor) -> None:
     executor.shutdown(wait=True)
 
 
+def _read_build(folder: Path):
+    """``(build.json's content, its grid)`` of a build folder, or ``(None, None)`` without
+    one. A stored grid or stored solver options that this version refuses
+    (:func:`make_grid`, :func:`check_build`) are reported with what to do: its points were
+    solved with values no solver accepts now, so the build cannot be resumed as recorded."""
+    path = folder / "build.json"
+    if not path.exists():
+        return None, None
+    what = "a new folder or a build folder of 'vesicle-tube map build'"
+    info = read_json(path, name="out", what=what)
+    expect(isinstance(info, dict) and isinstance(info.get("grid"), dict)
+           and isinstance(info.get("parameters", {}), dict)
+           and isinstance(info.get("parameters", {}).get("options", {}), dict)
+           and isinstance(info.get("provenance", {}), dict),
+           name="out", path=path, what=what, reason="build.json without a grid and parameters")
+    g = info["grid"]
+    try:
+        grid = make_grid(g["nu"], g["lam_ratio"], g["ca_b"], g["methods"])
+        check_build(grid, info.get("parameters", {}).get("options", {}))
+    except InvalidParameterError as exc:
+        raise InvalidParameterError(
+            "out", str(folder), "a new folder, or a build folder whose build.json this version "
+            "accepts", f"its build.json records a value the solvers refuse, {exc.name}: "
+            f"{exc}; a build with these values cannot be resumed: build into a new folder (or "
+            "delete this one and build again)") from None
+    except (KeyError, TypeError, ValueError) as exc:
+        raise UnreadableFile("out", path, what, f"a malformed grid in build.json ({exc!r})") \
+            from None
+    return info, grid
+
+
+def _lock_holder(fd: int) -> str:
+    """`` (pid N)`` of the build that holds the lock file open as ``fd``, if it wrote it."""
+    try:
+        text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+    except OSError:
+        return ""
+    return f" (pid {text})" if text.isdigit() else ""
+
+
+@contextlib.contextmanager
+def _locked(folder: Path):
+    """Hold the build lock of ``folder`` (module docstring) for the ``with`` block; yields the
+    lock file's descriptor. Another build holding it: :class:`InvalidParameterError` at once.
+    The file is removed on exit while still locked; a build that opened it before the removal
+    finds, once it holds the lock, that the name no longer leads to its file and tries again."""
+    path = folder / LOCK_NAME
+    valid = "a folder no other build is writing"
+    while True:
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o666)
+        except OSError as exc:
+            raise InvalidParameterError("out", str(folder), valid, "cannot create its lock "
+                                        f"file {LOCK_NAME} ({exc.strerror or exc})") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            holder = _lock_holder(fd)
+            os.close(fd)
+            if isinstance(exc, BlockingIOError):
+                raise InvalidParameterError(
+                    "out", str(folder), valid, f"another build{holder} is writing there; wait "
+                    "for it to end, or build into another folder") from None
+            raise InvalidParameterError("out", str(folder), valid, f"cannot lock {LOCK_NAME} "
+                                        f"({exc.strerror or exc})") from None
+        try:
+            same = os.stat(path).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode("ascii"))
+        yield fd
+    finally:
+        path.unlink(missing_ok=True)
+        os.close(fd)
+
+
 def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
               max_time=None, retry_failed=False, progress=None, pack=True) -> dict:
     """Build (or resume) the solution map in ``folder``; see the module docstring.
@@ -414,13 +626,16 @@ def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
         points are kept, ``build.json`` records the new grid and the date); another grid, or
         options different from the stored ones, are refused (start a new folder).
     options : dict, optional
-        Solver options per method, merged over :data:`DEFAULT_OPTIONS`.
+        Solver options per method, merged over :data:`DEFAULT_OPTIONS`: for ``bem`` those of
+        :func:`bem.vesicle.check_vesicle_inputs` (``n_modes``, ``tol``, ...), for
+        ``lubrication`` ``tol``.
     workers : int, optional
-        Local worker processes (default: the number of cores); 1 solves in this process.
+        Local worker processes, 1 to :func:`max_workers` (default: the number of cores); 1
+        solves in this process. Not with ``scheduler``.
     scheduler : str, optional
         Address of a Dask distributed scheduler; the lines run there instead.
     max_time : float, optional
-        Wall-time budget of each point [s]; None: no limit.
+        Wall-time budget of each point [s], > 0; None: no limit.
     retry_failed : bool
         Solve again the points stored as failed (default: finished points are never recomputed).
     progress : callable, optional
@@ -435,47 +650,63 @@ def build_map(folder, grid=None, *, options=None, workers=None, scheduler=None,
         ``total``, ``done``, ``failed``, ``missing`` point counts, ``new`` (solved now),
         ``timed_out`` (of those, stopped at ``max_time``), ``seconds``, ``errors`` (lines that
         raised) and ``map`` (the packed file or None).
+
+    Raises
+    ------
+    InvalidParameterError
+        Before the folder is touched: a grid point or option the solvers refuse
+        (:func:`check_build`), ``workers`` out of range or given with ``scheduler``, an
+        unreachable scheduler. After taking the folder's lock (nothing written): another build
+        holds it, or its ``build.json`` is unreadable, of another grid or options, or records
+        values the solvers refuse.
     """
     folder = Path(folder)
     options = {m: {**DEFAULT_OPTIONS.get(m, {}), **(options or {}).get(m, {})} for m in METHODS}
-    if max_time is not None:
-        check_range("max_time", max_time, 0.0, math.inf, lo_open=True)
-    old = None
-    if (folder / "build.json").exists():
-        try:
-            old = json.loads((folder / "build.json").read_text(encoding="utf-8"))
-            old_grid = make_grid(old["grid"]["nu"], old["grid"]["lam_ratio"],
-                                 old["grid"]["ca_b"], old["grid"]["methods"])
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise InvalidParameterError("out", str(folder), "a new folder or a build folder of "
-                                        "'vesicle-tube map build'",
-                                        f"unreadable build.json ({exc})") from None
-        extended = grid is not None and grid != old_grid
-        if extended and not _contains(grid, old_grid):
-            raise InvalidParameterError("out", str(folder), "a new folder, the grid it was "
-                                        "built with, or a grid that contains it (an extension)",
-                                        "it holds a build of another grid")
-        if old.get("parameters", {}).get("options") != json.loads(json.dumps(options)):
-            raise InvalidParameterError("out", str(folder), "a new folder, or the solver "
-                                        "options it was built with", "it holds a build with "
-                                        f"options {old['parameters'].get('options')}")
-        if extended:                     # the stored points stay; only the new ones are solved
-            old["grid"] = grid
-            old.setdefault("extended", []).append(_now())
-            write_json(folder / "build.json", old, indent=1, sort_keys=False)
-        grid = grid or old_grid
-    grid = grid or make_grid()
+    check_build(grid if grid is not None else make_grid(), options, max_time)
+    if workers is not None:
+        if scheduler:
+            raise InvalidParameterError("workers", workers, "none with a scheduler (the "
+                                        "cluster's workers run the lines)")
+        check_range("workers", workers, 1, max_workers(), reason="one process per core")
+        if int(workers) != workers:
+            raise InvalidParameterError("workers", workers, f"an integer, 1 <= workers <= "
+                                        f"{max_workers()}")
     client = _connect(scheduler) if scheduler else None
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        if old is None:
-            info = {"grid": grid, "parameters": {"options": options, "max_time": max_time},
-                    "provenance": run_provenance()}      # its date: the build's start
-            write_json(folder / "build.json", info, indent=1, sort_keys=False)
-        provenance = old["provenance"] if old else info["provenance"]
-        provenance = {k: v for k, v in provenance.items() if k not in ("created", "date")}
-        return _run(folder, grid, options, workers, client, max_time, retry_failed, progress,
-                    pack, provenance)
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InvalidParameterError("out", str(folder), "a folder that can be created",
+                                        exc.strerror or str(exc)) from None
+        with _locked(folder) as lock_fd:
+            old, old_grid = _read_build(folder)
+            if old is not None:
+                extended = grid is not None and grid != old_grid
+                if extended and not _contains(grid, old_grid):
+                    raise InvalidParameterError(
+                        "out", str(folder), "a new folder, the grid it was built with, or a "
+                        "grid that contains it (an extension)", "it holds a build of another "
+                        "grid")
+                stored = old.get("parameters", {}).get("options")
+                if stored != json.loads(json.dumps(options)):
+                    raise InvalidParameterError("out", str(folder), "a new folder, or the "
+                                                "solver options it was built with", "it holds "
+                                                f"a build with options {stored}")
+                if extended:             # the stored points stay; only the new ones are solved
+                    old["grid"] = grid
+                    old.setdefault("extended", []).append(_now())
+                    write_json(folder / "build.json", old, indent=1, sort_keys=False)
+                grid = grid or old_grid
+                provenance = old.get("provenance", {})
+            else:
+                grid = grid or make_grid()
+                info = {"grid": grid, "parameters": {"options": options, "max_time": max_time},
+                        "provenance": run_provenance()}      # its date: the build's start
+                write_json(folder / "build.json", info, indent=1, sort_keys=False)
+                provenance = info["provenance"]
+            provenance = {k: v for k, v in provenance.items() if k not in ("created", "date")}
+            return _run(folder, grid, options, workers, client, max_time, retry_failed,
+                        progress, pack, provenance, lock_fd)
     finally:
         if client is not None:
             client.close()
@@ -492,12 +723,12 @@ def _own_temporaries(folder: Path) -> list[Path]:
 
 
 def _run(folder, grid, options, workers, client, max_time, retry_failed, progress, pack,
-         provenance) -> dict:
+         provenance, lock_fd=None) -> dict:
     started = time.monotonic()
     for tmp in _own_temporaries(folder):   # left by a killed build
         tmp.unlink(missing_ok=True)
     stored: dict = {}
-    for p in read_points(folder):
+    for p in read_points(folder, "out"):
         if p["success"] or not retry_failed:
             key = (p["method"], round(p["ca_b"], 9))
             stored.setdefault(key, {})[(round(p["nu"], 9), round(p["lam_ratio"], 9))] = p
@@ -538,7 +769,7 @@ def _run(folder, grid, options, workers, client, max_time, retry_failed, progres
         for method, ca, points, have in jobs:
             solve_line(str(folder), method, ca, points, have, *args, on_point=on_point)
     else:
-        _parallel(folder, jobs, args, workers, client, state, report)
+        _parallel(folder, jobs, args, workers, client, state, report, lock_fd)
     state["running"] = 0
     packed = pack_map(folder) if pack else None
     missing = total - done_before - state["new"]
@@ -568,16 +799,19 @@ def _pool_context():
     return multiprocessing.get_context("fork")
 
 
-def _parallel(folder, jobs, args, workers, client, state, report) -> None:
+def _parallel(folder, jobs, args, workers, client, state, report, lock_fd=None) -> None:
     """Run the line jobs on a process pool or a Dask client, polling the build folder for
-    progress; Ctrl-C stops the workers and propagates."""
+    progress; Ctrl-C stops the workers and propagates. ``lock_fd``: the build lock's
+    descriptor, which forked workers close (:func:`_init_worker`)."""
     executor = None
     if client is None:
         cores = os.cpu_count() or 1
         n = min(workers or cores, max(len(jobs), 1))
         parent = os.getpid()
-        executor = ProcessPoolExecutor(n, mp_context=_pool_context(),
-                                       initializer=_init_worker, initargs=(parent,))
+        context = _pool_context()
+        inherited = lock_fd if context.get_start_method() == "fork" else None
+        executor = ProcessPoolExecutor(n, mp_context=context, initializer=_init_worker,
+                                       initargs=(parent, inherited))
         threads = max(1, cores // n)
         submit = executor.submit
     else:
@@ -609,7 +843,7 @@ def _parallel(folder, jobs, args, workers, client, state, report) -> None:
             if fresh or finished:
                 seen |= fresh
                 state["new"] += len(fresh)
-                records = [json.loads((Path(folder) / n).read_text()) for n in fresh]
+                records = [read_point(Path(folder) / n, "out") for n in fresh]
                 state["failed"] += sum(not r["success"] for r in records)
                 state["timed_out"] += sum(status_of(r) is Status.TIME_LIMIT for r in records)
                 state["running"] = len(pending)

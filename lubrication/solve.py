@@ -85,7 +85,8 @@ from .results import LubricationResult, Status
 
 __all__ = ["solve_lubrication", "sweep_lubrication", "check_inputs", "lowest_lam_ratio",
            "high_ca_branch_end", "CAP_RADIUS", "CONSTRAINT_TOL", "FORCE_TOL", "NU_RANGE",
-           "MIN_LAM_RATIO", "CA_B_RANGE", "HIGH_CA_BRANCH_END", "MAX_SWEEP_POINTS"]
+           "MIN_LAM_RATIO", "CA_B_RANGE", "HIGH_CA_BRANCH_END", "MAX_SWEEP_POINTS",
+           "TOL_RANGE"]
 
 logger = logging.getLogger(__name__)
 
@@ -99,6 +100,9 @@ CAP_RADIUS = 2e-3
 # vesicle relative to the scale of its pressure force (physics notes §4).
 CONSTRAINT_TOL = 1e-8
 FORCE_TOL = 1e-3
+# Accepted relative collocation tolerance of solve_bvp: below 1e-12 it is under the residuals'
+# rounding floor; above 1e-3 the collocation no longer resolves the film.
+TOL_RANGE = (1e-12, 1e-3)
 # Resource envelope (module docstring). Largest mesh of one solve_bvp call: its Newton steps
 # factorise a sparse system of (6 or 8) x nodes unknowns, the longest stretch in compiled code
 # (where Ctrl-C waits): 1.0 s at 15 400 nodes, 2.0 s at 43 000 (measured, bending model).
@@ -293,7 +297,7 @@ class _Problem:
 
 def _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes, max_time=None) -> _Problem:
     nu, lam, lam_c, ca_b = check_inputs(nu, lam, lam_ratio, ca_b)
-    tol = float(check_range("tol", tol, 1e-12, 1e-3,
+    tol = float(check_range("tol", tol, *TOL_RANGE,
                             reason="solve_bvp's relative residual tolerance"))
     if (not isinstance(max_nodes, (int, np.integer)) or isinstance(max_nodes, bool)
             or not 100 <= max_nodes <= MAX_NODES):

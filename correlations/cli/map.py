@@ -3,27 +3,40 @@
 Follows :mod:`correlations.cli.contract` (table or ``--json``; exit 0 ok, 2 invalid input with one
 line naming the option or file, 130 interrupted). Light at start: the build (with the solvers
 and Dask) loads only inside ``map build``.
+
+``map build`` checks every grid value and solver option with the ranges of ``bem vesicle`` and
+``lubrication`` before ``--out`` is touched (:func:`correlations.map_build.check_build`), and
+exits 2 at once when another build is writing into ``--out``. ``map pack`` names ``DIR`` or
+``--out`` in every error, refuses a folder without a converged point (a map of holes answers
+no query) and reports the points the pack rejected as unphysical.
 """
 
 from __future__ import annotations
 
-import json
+import fnmatch
+import os
 import sys
 from pathlib import Path
 
-from lubrication.checks import check_positive, check_range
+from lubrication.checks import InvalidParameterError, check_positive, check_range
 from lubrication.geometry import critical_confinement
 from correlations.cli.contract import (EXIT_INTERRUPTED, Parser, UsageError, add_map_option,
                                       check_output_dir, finite_float, format_rows, format_value,
-                                      is_interrupt, options_named, positive_int)
-from correlations.solution_map import load_map, outside_reason, pack_map, query_map, read_points
+                                      is_interrupt, options_named, positive_int, short_path)
+from correlations.files import read_json
+from correlations.solution_map import (POINT_GLOB, load_map, outside_reason, pack_map,
+                                       query_map, read_points)
 
 __all__ = ["add_map_parser"]
 
-# The option a user types for each parameter name of the library.
+# The option a user types for each parameter name of the library (map build: the build's
+# names of the solver options, correlations.map_build.BuildInputError).
 OPTIONS = {"nu": "--nu", "lam_ratio": "--lam-ratio", "ca_b": "--ca-b", "methods": "--methods",
            "out": "--out", "scheduler": "--scheduler", "max_time": "--max-time",
-           "map": "--map", "folder": "DIR"}
+           "workers": "--workers", "bem_n_modes": "--bem-n-modes",
+           "bem_max_modes": "--bem-max-modes", "bem_tol": "--bem-tol",
+           "bem_residual_tol": "--bem-residual-tol", "lubrication_tol": "--lubrication-tol",
+           "map": "--map"}
 
 UNITS = {"V_over_U": "-", "dp_plus_R0": "eta U/R0", "ell": "R", "film_min": "R",
          "tension_max": "eta U", "tension_front": "eta U", "wall_shear_max": "eta U/R",
@@ -43,10 +56,14 @@ def _progress(state) -> None:
 
 def cmd_map_build(args):
     from correlations.map_build import (  # lazy: the solvers and scipy off the estimate's start-up
-        DEFAULT_GRID, build_map, make_grid)
+        DEFAULT_GRID, METHODS, build_map, make_grid)
     grid_given = any(v is not None for v in (args.nu, args.lam_ratio, args.lam_ratio_bem,
                                              args.lam_ratio_lubrication, args.ca_b, args.methods))
-    with _named(args):
+    # a list of lam/lam_c comes from --lam-ratio-<method>, else from --lam-ratio
+    ratio_options = {f"lam_ratio_{m}": (f"--lam-ratio-{m}" if getattr(args, f"lam_ratio_{m}")
+                                        is not None else "--lam-ratio") for m in METHODS}
+    # a file of the build folder that cannot be read (the pack at the end) is one of --out
+    with _named(args, folder="--out", **ratio_options):
         grid = None
         if grid_given:
             ratios = args.lam_ratio
@@ -55,7 +72,12 @@ def cmd_map_build(args):
                               (args.lam_ratio or DEFAULT_GRID["lam_ratio"][m]))
                           for m, given in (("bem", args.lam_ratio_bem),
                                            ("lubrication", args.lam_ratio_lubrication))}
-            grid = make_grid(args.nu, ratios, args.ca_b, args.methods)
+            try:
+                grid = make_grid(args.nu, ratios, args.ca_b, args.methods)
+            except InvalidParameterError as exc:
+                if exc.name != "grid":
+                    raise
+                raise UsageError(f"--nu, --lam-ratio, --ca-b: {exc}") from None
         options = {"bem": {k: v for k, v in (("n_modes", args.bem_n_modes),
                                              ("max_modes", args.bem_max_modes),
                                              ("tol", args.bem_tol),
@@ -71,7 +93,7 @@ def cmd_map_build(args):
         except (KeyboardInterrupt, SystemError) as exc:     # SystemError: see is_interrupt
             if not is_interrupt(exc):
                 raise
-            n = len(read_points(args.out)) if args.out else 0
+            n = sum(not p.name.startswith(".") for p in Path(args.out).glob(POINT_GLOB))
             print(f"vesicle-tube map build: interrupted; {n} points stored in {args.out} (every "
                   "file complete); run the same command again to resume", file=sys.stderr)
             raise SystemExit(EXIT_INTERRUPTED) from None
@@ -147,25 +169,79 @@ def coverage(data: dict) -> str:
     return "\n".join(lines + holes)
 
 
+def _check_pack_target(target: str, folder: str) -> None:
+    """``map pack --out FILE`` before any work: a file name (not empty, not a folder, not a
+    device), in an existing writable folder, and not a file of the build folder ``folder``
+    (its ``build.json`` or a point file)."""
+    if target.strip() == "":
+        raise UsageError("--out: the file name is empty")
+    p, name = Path(target), short_path(target)
+    try:
+        if p.is_dir() or target.endswith(os.sep):
+            raise UsageError(f"--out {name}: this is a folder; give a file name, e.g. "
+                             f"{os.path.join(name, 'solution_map.json')}")
+        if p.exists() and not p.is_file():
+            raise UsageError(f"--out {name}: not a regular file (a device, FIFO or socket)")
+        if p.parent.exists() and not p.parent.is_dir():
+            raise UsageError(f"--out {name}: {short_path(p.parent)!r} is a file, not a folder")
+        if not p.parent.is_dir():
+            raise UsageError(f"--out {name}: the folder {short_path(p.parent)!r} does not "
+                             "exist")
+        if p.parent.resolve() == Path(folder).resolve() and (
+                p.name == "build.json" or fnmatch.fnmatchcase(p.name, POINT_GLOB)):
+            raise UsageError(f"--out {name}: a file of the build folder DIR; give another "
+                             "name, e.g. the default DIR/solution_map.json")
+    except OSError as exc:          # a name too long, a loop of links, no permission
+        raise UsageError(f"--out {name}: {exc.strerror or exc}") from None
+    check_output_dir("--out", str(p.parent))
+
+
+def _check_build_folder(folder: str) -> None:
+    """``map pack DIR`` before any work: a folder with a ``build.json``."""
+    if str(folder).strip() == "":
+        raise UsageError("DIR: the folder name is empty")
+    p, name = Path(folder), short_path(folder)
+    try:
+        if not p.exists():
+            raise UsageError(f"DIR {name}: no such folder")
+        if not p.is_dir():
+            raise UsageError(f"DIR {name}: this is a file; give the build folder of "
+                             "'vesicle-tube map build'")
+        if not (p / "build.json").is_file():
+            raise UsageError(f"DIR {name}: not a build folder of 'vesicle-tube map build' "
+                             "(no build.json)")
+    except OSError as exc:          # a name too long, a loop of links, no permission
+        raise UsageError(f"DIR {name}: {exc.strerror or exc}") from None
+
+
 def cmd_map_pack(args):
     target = args.pack_out
+    _check_build_folder(args.folder)
     if target is not None:
-        if Path(target).is_dir():
-            raise UsageError(f"--out {target}: this is a folder; give a file name")
-        if not Path(target).parent.is_dir():
-            raise UsageError(f"--out {target}: the folder {str(Path(target).parent)!r} does "
-                             "not exist")
-        check_output_dir("--out", str(Path(target).parent))
-    if not (Path(args.folder) / "build.json").is_file():
-        raise UsageError(f"DIR {args.folder}: not a build folder of 'vesicle-tube map build' "
-                         "(no build.json)")
-    with _named(args):
-        path = pack_map(args.folder, target)
-    data = json.loads(path.read_text(encoding="utf-8"))
+        _check_pack_target(target, args.folder)
+    # every file read comes from DIR (build.json, the point files); args=None: DIR is never
+    # a default
+    with options_named({"folder": "DIR", "map": "DIR", "out": "DIR"}):
+        points = read_points(args.folder)        # each point file checked before any writing
+        if not any(p["success"] for p in points):
+            stored = f"its {len(points)} points all failed" if points else "no point stored"
+            raise UsageError(f"DIR {args.folder}: no converged point to pack ({stored}); a "
+                             "map of holes answers no query: build it first ('vesicle-tube map "
+                             f"build --out {args.folder}')")
+        packed = pack_map(args.folder, target)
+    path = Path(packed)
+    data = read_json(path, name="--out" if target is not None else "DIR",
+                     what="the packed map just written")
     out = {"command": "map pack", "converged": True, "map": str(path),
            "points": len(data["columns"]["nu"]), "holes": len(data["holes"]),
-           "bytes": path.stat().st_size, "coverage": coverage_summary(data)}
-    rows = [(k, out[k], "", "", "") for k in ("map", "points", "holes", "bytes")]
+           "rejected": len(data.get("rejected", [])), "bytes": path.stat().st_size,
+           "coverage": coverage_summary(data)}
+    if out["rejected"]:
+        out["warnings"] = [f"{out['rejected']} converged points rejected as unphysical (holes "
+                           f"of the map; each with its reason under 'rejected' in {path})"
+                           + ("; the map has no node left: 'map query' refuses it"
+                              if not out["points"] else "")]
+    rows = [(k, out[k], "", "", "") for k in ("map", "points", "holes", "rejected", "bytes")]
     return out, format_rows(rows, f"Packed {args.folder}") + "\n\n" + coverage(data)
 
 
@@ -224,36 +300,41 @@ def add_map_parser(subparsers) -> None:
     b.add_argument("--out", required=True, metavar="DIR",
                    help="build folder: build.json, one JSON file per point, solution_map.json")
     b.add_argument("--workers", type=positive_int,
-                   help="local worker processes (default: the number of cores; 1: in this "
-                        "process)")
+                   help="local worker processes, 1 to the number of cores (default: the number "
+                        "of cores; 1: in this process; not with --scheduler)")
     b.add_argument("--scheduler", metavar="ADDRESS",
                    help="address of a Dask distributed scheduler, e.g. tcp://host:8786 "
                         "(needs vesicle-tube[distributed]; workers must see --out)")
     b.add_argument("--max-time", type=finite_float, metavar="SECONDS",
-                   help="wall-time budget of each point; an expired point is stored as "
-                        "failed [s] (default: no limit)")
-    b.add_argument("--nu", type=finite_float, nargs="+", help="reduced volumes, 0 < nu < 1 [-] "
-                   "(default 0.6 0.65 ... 0.95 0.98)")
+                   help="wall-time budget of each point, > 0; an expired point is stored as "
+                        "failed and the build exits 1 [s] (default: no limit)")
+    # the ranges below are those of 'bem vesicle' and 'lubrication' (the solvers' checks,
+    # correlations.map_build.check_build), written out so that the parser needs no numpy
+    b.add_argument("--nu", type=finite_float, nargs="+", help="reduced volumes, 0 < nu < 1 "
+                   "(lubrication: 0.3 <= nu < 1) [-] (default 0.6 0.65 ... 0.95 0.98)")
     b.add_argument("--lam-ratio", type=finite_float, nargs="+",
-                   help="lam/lam_c of every method, 0 < r < 1 [-] (default: BEM 0.2 ... 0.98, "
-                        "lubrication 0.9 ... 0.9999)")
+                   help="lam/lam_c of every method, 0 < r < 1 (lubrication: 0.1 <= r < 1) [-] "
+                        "(default: BEM 0.2 ... 0.98, lubrication 0.9 ... 0.9999)")
     b.add_argument("--lam-ratio-bem", type=finite_float, nargs="+",
-                   help="lam/lam_c of the BEM lines only [-]")
+                   help="lam/lam_c of the BEM lines only, 0 < r < 1 [-]")
     b.add_argument("--lam-ratio-lubrication", type=finite_float, nargs="+",
-                   help="lam/lam_c of the lubrication lines only [-]")
+                   help="lam/lam_c of the lubrication lines only, 0.1 <= r < 1 [-]")
     b.add_argument("--ca-b", type=finite_float, nargs="+",
-                   help="bending capillary numbers eta U R0^2/kappa > 0 [-] (default 5 9 15 25 50 150 500)")
+                   help="bending capillary numbers eta U R0^2/kappa, 0.01 to 1e5 [-] "
+                        "(default 5 9 15 25 50 150 500); at most 20000 points in all")
     b.add_argument("--methods", nargs="+", choices=("bem", "lubrication"),
                    help="solvers (default both)")
     b.add_argument("--bem-n-modes", type=positive_int,
-                   help="BEM shape modes (default: automatic refinement)")
-    b.add_argument("--bem-max-modes", type=positive_int, help="BEM largest mode count")
+                   help="BEM shape modes, 8 to 96 (default: automatic refinement)")
+    b.add_argument("--bem-max-modes", type=positive_int,
+                   help="BEM largest mode count of the refinement, 24 to 96")
     b.add_argument("--bem-tol", type=finite_float,
-                   help="BEM relative tolerance of the refinement pair [-] (default 1e-4)")
+                   help="BEM relative tolerance of the refinement pair, 1e-12 to 0.5 [-] "
+                        "(default 1e-4)")
     b.add_argument("--bem-residual-tol", type=finite_float,
-                   help="BEM steady residual tolerance [U] (default 1e-4)")
+                   help="BEM steady residual tolerance, 1e-14 to 10 [U] (default 1e-3)")
     b.add_argument("--lubrication-tol", type=finite_float,
-                   help="lubrication collocation tolerance [-] (default 1e-7)")
+                   help="lubrication collocation tolerance, 1e-12 to 1e-3 [-] (default 1e-7)")
     b.add_argument("--retry-failed", action="store_true",
                    help="solve again the points stored as failed")
     b.add_argument("--no-pack", action="store_true", help="do not pack at the end")

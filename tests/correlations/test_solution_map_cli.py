@@ -1,9 +1,9 @@
 """``vesicle-tube map``: bad input (exit 2, one line), Ctrl-C and SIGKILL during a parallel
 build followed by a resume that solves only the missing points, and Dask distributed builds.
 
-The interrupted builds run as their own process with a stand-in solver (0.4 s per point, each
-call logged) patched into correlations.map_build.SOLVERS before the command starts; the process
-pool forks, so its workers use it too.
+The interrupted builds run as their own process with a stand-in solver (1 s per point, or
+``STAND_IN_SECONDS``; each call logged) patched into correlations.map_build.SOLVERS before the
+command starts; the process pool forks, so its workers use it too.
 """
 
 from __future__ import annotations
@@ -131,14 +131,16 @@ def test_pack_writes_the_map_and_reports_its_size(cli, tmp_path):
 # ----------------------------------------------------------------------------- interrupt, resume
 
 STAND_IN = """
-import sys, time
+import os, sys, time
 from correlations import map_build
 from correlations.solution_map import QUANTITIES
 log = sys.argv[1]
+# long enough that the signal lands mid-build on a loaded machine
+seconds = float(os.environ.get("STAND_IN_SECONDS", "1.0"))
 def stand_in(nu, lam_ratio, ca_b, warm, options, max_time):
     with open(log, "a") as f:
         f.write(f"{nu} {lam_ratio}\\n")
-    time.sleep(1.0)        # long enough that the signal lands mid-build on a loaded machine
+    time.sleep(seconds)
     return ({"success": True, "message": "ok", **{q: 1.0 + lam_ratio for q in QUANTITIES},
              "shape_class": "bullet", "error_estimate": {}, "residual": 0.0, "bie_solves": 0,
              "shape": None}, None)
@@ -150,8 +152,8 @@ GRID = ["--methods", "lubrication", "--nu", "0.8", "0.9", "--lam-ratio", "0.9", 
         "0.96", "--ca-b", "50", "--workers", "2"]
 
 
-def _start(log, out):
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+def _start(log, out, seconds=1.0):
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "STAND_IN_SECONDS": str(seconds)}
     return subprocess.Popen([sys.executable, "-c", STAND_IN, str(log), "map", "build", "--out",
                              str(out), *GRID], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, env=env, start_new_session=True)
@@ -172,7 +174,10 @@ def _calls(log):
 
 
 def _check_complete(out):
-    assert not list(out.glob(".*")), list(out.glob(".*"))
+    """Every file complete, no temporary left (the lock file of a killed build may stay: it
+    is unlocked, and the next build takes it)."""
+    hidden = [p for p in out.glob(".*") if p.name != map_build.LOCK_NAME]
+    assert not hidden, hidden
     for p in out.glob("*.json"):
         json.loads(p.read_text())                  # every file complete
 
@@ -205,6 +210,51 @@ def test_interrupted_build_resumes_with_only_the_missing_points(tmp_path, sig):
     assert len(_calls(log)) == 8 - stored, (_calls(log), stored)
     assert len(read_points(out)) == 8 and (out / "solution_map.json").exists()
     _check_complete(out)
+
+
+def _open_files(pid: int) -> set[str]:
+    """What process ``pid`` holds open (the targets of its /proc/PID/fd links)."""
+    found = set()
+    for fd in Path(f"/proc/{pid}/fd").iterdir():
+        try:
+            found.add(os.readlink(fd))
+        except OSError:                            # closed meanwhile
+            pass
+    return found
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and the kernel's "
+                    "parent-death signal (PR_SET_PDEATHSIG) are Linux's")
+def test_a_build_whose_process_was_killed_resumes_at_once_with_the_missing_points(tmp_path):
+    """kill -9 of the build process alone: its 2 workers never held the build lock (only the
+    build has the lock file open) and die with it, the kernel releases the build's lock, so a
+    new build is not refused as a concurrent one and solves exactly the missing points (about
+    6 s: two command-line processes of ~2 s start-up each)."""
+    out, log = tmp_path / "build", tmp_path / "calls.txt"
+    proc = _start(log, out, seconds=0.5)
+    _wait_for_points(out, 2, proc)
+    lock = str(out / map_build.LOCK_NAME)
+    workers = [int(p) for p in
+               Path(f"/proc/{proc.pid}/task/{proc.pid}/children").read_text().split()]
+    holders = [pid for pid in [proc.pid, *workers] if lock in _open_files(pid)]
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.communicate(timeout=30)
+    assert len(workers) >= 2 and holders == [proc.pid], (workers, holders)
+    t0 = time.monotonic()
+    while any(_alive(p) for p in workers) and time.monotonic() - t0 < 5:
+        time.sleep(0.05)
+    _check_complete(out)
+    stored = len(read_points(out))
+    assert 2 <= stored < 8
+    log.write_text("")
+    proc = _start(log, out, seconds=0.5)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert sorted(_calls(log)) == sorted(set(_calls(log))) and len(_calls(log)) == 8 - stored
+    assert len(read_points(out)) == 8
+    _check_complete(out)
+    assert not (out / map_build.LOCK_NAME).exists()     # removed by the build that ended
 
 
 # ----------------------------------------------------------------------------- Dask
