@@ -2,6 +2,9 @@
 
 A result file is written to a temporary file in the target directory and renamed over the target
 (:func:`os.replace` is atomic on POSIX), so an interrupted run never leaves a half-written file.
+A file that cannot be written (a full disk, no permission, a name too long, a folder where the
+file should go) raises :class:`WriteError` naming the target and the operating system's reason;
+the temporary file is removed and the target is left as it was.
 
 Non-finite numbers (the one policy of every result file): JSON has no NaN or infinity, so
 :func:`clean_json` writes them as ``null`` (Python None), and a CSV cell holding one is left
@@ -21,8 +24,10 @@ dependencies, the git commit of the source tree and the date, recorded in every 
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import datetime
+import errno
 import functools
 import json
 import math
@@ -35,8 +40,9 @@ from pathlib import Path
 
 import lubrication   # the package's __version__, read at call time (no import-order dependency)
 
-__all__ = ["atomic_write", "clean_json", "forget_written_files", "provenance", "save_json",
-           "save_result", "write_json", "written_files"]
+__all__ = ["TEMPORARY_EXTRA", "WriteError", "atomic_write", "clean_json", "forget_written_files",
+           "make_folder", "path_limits", "provenance", "save_json", "save_result", "write_json",
+           "written_files"]
 
 # Every file completed by atomic_write in this process, in order: the command line names them
 # after a run, and after an interrupt (each of them is complete).
@@ -53,11 +59,65 @@ def forget_written_files() -> None:
     _WRITTEN.clear()
 
 
+class WriteError(OSError):
+    """A result file could not be written: ``filename`` is the file, ``strerror`` the operating
+    system's reason (``errno`` its code). Nothing was left behind: the target is as it was
+    before and the temporary file is removed."""
+
+
+def _write_error(exc: OSError, path) -> WriteError:
+    """``exc`` (raised while writing ``path``) as a :class:`WriteError` naming ``path``."""
+    if isinstance(exc, WriteError):
+        return exc
+    return WriteError(exc.errno, exc.strerror or str(exc), str(path))
+
+
+def path_limits(folder) -> tuple[int, int]:
+    """``(NAME_MAX, PATH_MAX)`` in bytes of the file system holding ``folder`` (or its nearest
+    existing parent), by :func:`os.pathconf`; the Linux values 255 and 4096 where the system
+    does not tell. PATH_MAX counts the terminating NUL: a path may have PATH_MAX - 1 bytes."""
+    folder = Path(os.path.abspath(folder))
+    for probe in (folder, *folder.parents):
+        try:
+            if probe.is_dir():
+                break
+        except OSError:             # e.g. the name itself is too long to look up
+            continue
+    limits = []
+    for name, default in (("PC_NAME_MAX", 255), ("PC_PATH_MAX", 4096)):
+        try:
+            limits.append(os.pathconf(probe, name))
+        except (OSError, ValueError):
+            limits.append(default)
+    return limits[0], limits[1]
+
+
+#: The temporary file of :func:`atomic_write` is ".NAME.XXXXXXXX.tmp" (mkstemp: 8 random
+#: characters): this many bytes more than NAME, which is shortened where the file system's name
+#: limit needs it (so its path is at most this much longer than the target's).
+TEMPORARY_EXTRA = len("." + "." + "XXXXXXXX" + ".tmp")
+
+
+def _refuse_folder(path: Path) -> None:
+    """Raise :class:`WriteError` when ``path`` is an existing folder (EISDIR) or cannot be looked
+    up (e.g. its name is too long)."""
+    try:
+        folder = path.is_dir()
+    except OSError as exc:
+        raise _write_error(exc, path) from exc
+    if folder:
+        raise WriteError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+
+
 def atomic_write(path, write, *, binary: bool = False) -> Path:
     """Call ``write(file)`` on a temporary file beside ``path``, then rename it to ``path``.
 
     The file gets the permissions of a normally created file (0666 minus the umask; mkstemp
     alone would leave 0600). Text files are UTF-8 with untranslated newlines. Returns the path.
+    Any operating-system failure (full disk, permission, read-only folder, a name too long, a
+    folder at ``path``) raises :class:`WriteError` naming ``path``, after the temporary file
+    is removed; ``path`` is then unchanged. The temporary file's name is NAME shortened, where
+    needed, so that any name the file system accepts can be written.
 
     Examples
     --------
@@ -67,21 +127,28 @@ def atomic_write(path, write, *, binary: bool = False) -> Path:
     'ok'
     """
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    umask = os.umask(0)
-    os.umask(umask)
+    tmp = None
     try:
-        os.chmod(tmp, 0o666 & ~umask)
+        _refuse_folder(path)
+        room = max(path_limits(path.parent)[0] - TEMPORARY_EXTRA, 0)
+        name = os.fsdecode(os.fsencode(path.name)[:room])
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{name}.", suffix=".tmp")
         with (os.fdopen(fd, "wb") if binary else
               os.fdopen(fd, "w", newline="", encoding="utf-8")) as f:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)
             write(f)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
         _WRITTEN.append(path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    except BaseException as exc:
+        if tmp is not None:
+            with contextlib.suppress(OSError):      # already gone, or the folder went away
+                os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise _write_error(exc, path) from exc
         raise
     return path
 
@@ -117,10 +184,18 @@ def write_json(path, data, *, indent: int = 2, sort_keys: bool = True) -> Path:
                                                   allow_nan=False))
 
 
+def make_folder(directory) -> None:
+    """Create ``directory`` (and its parents) if needed; :class:`WriteError` if it cannot be."""
+    try:
+        Path(directory).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise _write_error(exc, directory) from exc
+
+
 def save_json(directory, stem: str, data: dict) -> Path:
     """Write ``<directory>/<stem>.json`` by :func:`write_json`, creating ``directory``."""
     directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
+    make_folder(directory)
     return write_json(directory / f"{stem}.json", data)
 
 
@@ -136,10 +211,13 @@ def save_result(directory, stem: str, data: dict, columns, profiles) -> tuple[Pa
     ``columns`` is a sequence of ``(name, description with unit)``; ``profiles(name)`` returns
     the array of that column. Both files are written atomically (:func:`atomic_write`), the
     JSON by :func:`write_json`; floats in the CSV are written with ``repr`` (round-trip exact),
-    a non-finite one as an empty cell. Returns the two paths.
+    a non-finite one as an empty cell. A folder in the place of either file is refused
+    (:class:`WriteError`) before either is written. Returns the two paths.
     """
+    json_path, csv_path = Path(directory) / f"{stem}.json", Path(directory) / f"{stem}.csv"
+    for path in (json_path, csv_path):
+        _refuse_folder(path)
     json_path = save_json(directory, stem, dict(data, profile_columns=dict(columns)))
-    csv_path = Path(directory) / f"{stem}.csv"
 
     def write_csv(f):
         w = csv.writer(f, lineterminator="\n")

@@ -1,9 +1,9 @@
 """The ``vesicle-tube`` command line.
 
 Every command follows the contract of :mod:`correlations.cli.contract` (table or strict JSON;
-exit 0 ok, 2 invalid input, 1 not converged, 130 interrupted). Out-of-range warnings go to
-stderr, one line each, and into the JSON under ``"warnings"``; the files a command wrote are
-named on stderr.
+exit 0 ok, 2 invalid input, 1 not converged or output not written, 130 interrupted).
+Out-of-range warnings go to stderr, one line each, and into the JSON under ``"warnings"``; the
+files a command wrote are named on stderr.
 
 Heavy imports (matplotlib, scipy, numba) happen only inside the commands that need them, so that
 ``vesicle-tube estimate`` starts fast.
@@ -23,13 +23,14 @@ from correlations import viscosity
 from correlations.cli.bem import add_bem_parser
 from correlations.cli.check import add_check_parser
 from correlations.cli.contract import (EXIT_CHECK_FAILED, EXIT_INTERRUPTED, EXIT_INVALID,
-                                      EXIT_NOT_CONVERGED, EXIT_OK,
+                                      EXIT_NOT_CONVERGED, EXIT_NOT_WRITTEN, EXIT_OK,
                                       Parser, UsageError, check_output_dir, check_plot_path,
-                                      check_report_path,
+                                      check_report_path, command_streams,
                                       dump_json, format_rows, format_value_error,
                                       interrupted_message, is_interrupt,
-                                      non_finite_keys, one_line, options_named,
-                                      quiet_broken_pipe, save_plot)
+                                      non_finite_keys, one_line, options_named, os_error_message,
+                                      not_written_message, output_failed, quiet_broken_pipe,
+                                      save_plot, saved)
 from correlations.cli.figures import add_figures_parser
 from correlations.cli.infer import add_infer_parser
 from correlations.cli.lubrication import add_parser as add_lubrication_parser
@@ -193,7 +194,7 @@ def cmd_estimate(args) -> dict:
                       (["why no value:"] + why if why else []) +
                       ["methods and validity ranges: correlations/registry.py, docs/user-guide.md"])
     if args.plot:
-        save_plot(plot_estimate(est), args.plot)
+        saved(out, "--plot", lambda: save_plot(plot_estimate(est), args.plot))
     return out, human
 
 
@@ -235,7 +236,8 @@ def cmd_viscosity(args) -> dict:
              "" if h_t is not None else "Fahraeus fit not meaningful here"),
             (LABELS["eta_rel"], eta, "-", law, "" if eta is not None else "rejected")]
     if args.plot:
-        save_plot(plot_relative_viscosity(hematocrits=(h_d,)), args.plot)
+        saved(out, "--plot", lambda: save_plot(plot_relative_viscosity(hematocrits=(h_d,)),
+                                               args.plot))
     return out, format_rows(rows, f"Relative apparent viscosity ({law})") + "\n" + UNIT_CONVENTION
 
 
@@ -419,6 +421,8 @@ def _check_outputs(args) -> None:
 
 # Result keys of every command checked against the physical bounds
 # (lubrication.checks.OUTPUT_BOUNDS), with the quantity whose bound applies.
+#
+# The membrane tensions have no bound (their sign is not a law: OUTPUT_BOUNDS).
 _BOUNDED_KEYS = (("V_over_U", "V_over_U"), ("dp_plus_R0", "dp_plus_R0"),
                  ("dp_plus_R", "dp_plus_R0"), ("film_min", "film"), ("film", "film"),
                  ("ell", "ell"), ("eta_rel", "eta_rel"))
@@ -455,6 +459,14 @@ def _run(args) -> int:
         except (InvalidParameterError, UsageError) as exc:
             print(f"{prog}: error: {one_line(exc)}", file=sys.stderr)
             return EXIT_INVALID
+        except BrokenPipeError:
+            raise
+        except OSError as exc:      # a file the command writes as it works (map build, figures)
+            for path in written_files():
+                print(f"wrote {path}", file=sys.stderr)
+            print(f"{prog}: error: {os_error_message(exc)}; the work stopped there",
+                  file=sys.stderr)
+            return EXIT_NOT_WRITTEN
     bad = non_finite_keys(out)
     if bad:     # a safety net: every command reports missing values as None, never NaN/inf
         print(f"{prog}: error: the result has non-finite values ({', '.join(bad[:5])}): the "
@@ -472,10 +484,14 @@ def _run(args) -> int:
         out["warnings"] = messages
     for path in written_files():
         print(f"wrote {path}", file=sys.stderr)
-    print(dump_json(out) if args.json else human, flush=True)
+    print(dump_json(out, sys.stdout) if args.json else human, flush=True)
     converged = out.get("converged", True)
     if not converged and out.get("message"):
         print(f"{prog}: not converged: {out['message']}", file=sys.stderr)
+    for entry in out.get("not_written", []):
+        print(f"{prog}: error: {not_written_message(entry)}", file=sys.stderr)
+    if out.get("not_written"):
+        return EXIT_NOT_WRITTEN
     if out.get("command") == "check" and out.get("verdict") == "fail":
         return EXIT_CHECK_FAILED
     if out.get("command") == "infer" and out.get("status") == "inconsistent":
@@ -487,15 +503,18 @@ def _run(args) -> int:
 def main(argv=None) -> int:
     """Entry point of ``vesicle-tube``: exit status per :mod:`correlations.cli.contract`."""
     prog = "vesicle-tube"
-    try:
-        args = build_parser().parse_args(argv)
-        prog = _prog(args)
-        return _run(args)
-    except (KeyboardInterrupt, SystemError) as exc:     # SystemError: see is_interrupt
-        if not is_interrupt(exc):
-            raise
-        print(interrupted_message(prog), file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except BrokenPipeError:
-        return quiet_broken_pipe()
+    with command_streams():
+        try:
+            args = build_parser().parse_args(argv)
+            prog = _prog(args)
+            return _run(args)
+        except (KeyboardInterrupt, SystemError) as exc:     # SystemError: see is_interrupt
+            if not is_interrupt(exc):
+                raise
+            print(interrupted_message(prog), file=sys.stderr)
+            return EXIT_INTERRUPTED
+        except BrokenPipeError:
+            return quiet_broken_pipe()
+        except OSError as exc:      # stdout (the result, --help): a full disk, an I/O error
+            return output_failed(prog, exc)
 

@@ -23,6 +23,7 @@ physical number.
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import sys
@@ -32,7 +33,7 @@ import numpy as np
 from lubrication.io import clean_json
 from correlations.cli.contract import (Parser, UsageError, add_max_time_option, finite_float,
                                       format_rows, format_value, options_named, positive_int,
-                                      save_plot)
+                                      save_plot, saved)
 
 __all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere", "cmd_bem_vesicle",
            "cmd_bem_vesicle_sweep"]
@@ -44,6 +45,35 @@ _OPTIONS = {"lam": "--lam", "lam_ratio": "--lam-ratio", "lams": "--lam", "lam_ra
             "tol": "--tol", "tension_tol": "--tension-tol", "residual_tol": "--residual-tol",
             "n_modes": "--modes",
             "max_modes": "--max-modes", "max_time": "--max-time"}
+
+
+# The counts' ranges of the solvers' resource envelopes, written out so that registering the
+# commands does not import bem (tests/test_cli.py checks they are the solvers' own): each
+# maximum is what one level of the solver may cost in memory and time (module docstrings of
+# bem/solve.py, bem/drop.py, bem/vesicle.py). Both are checked as the option is parsed (but the
+# minimum of --max-modes, which depends on --modes) and again by the solver's input check.
+#: Sphere panels: a mesh has at most bem.solve.MAX_UNKNOWNS = 4000 unknowns (dense system
+#: ~0.55 GB, one LU ~1.5 s); 51 panels fit at the smallest sphere, a/R = 0.001, fewer as a/R grows.
+SPHERE_PANELS = (3, 51, "a mesh has at most 4000 unknowns, ~0.55 GB")
+#: Drop shape modes (bem.drop.MAX_MODES): 64 modes make 22 drop panels, ~0.2 GB of operators.
+DROP_MODES = (6, 64, "22 drop panels and ~0.2 GB of operators at 64")
+#: Vesicle shape modes (bem.vesicle.MAX_MODES): 96 modes cost ~5 s per Jacobian on 2 cores
+#: and < 1 GB; the automatic refinement's largest level starts at 24.
+VESICLE_MODES = (8, 96, "~5 s per Newton Jacobian on 2 cores and < 1 GB at 96")
+VESICLE_MAX_MODES = (24,) + VESICLE_MODES[1:]
+
+
+def _count(bounds, minimum: bool = True):
+    """argparse type of a count of ``bounds`` = (minimum, maximum, reason of the maximum); with
+    ``minimum`` False only the maximum (a minimum that depends on other options is left to the
+    solver's check)."""
+    return functools.partial(positive_int, minimum=bounds[0] if minimum else 1,
+                             maximum=bounds[1], reason=bounds[2])
+
+
+def _range(bounds) -> str:
+    """"LO to HI (REASON)" for a help text."""
+    return f"{bounds[0]} to {bounds[1]} ({bounds[2]})"
 
 
 def _options_named():
@@ -76,7 +106,7 @@ def cmd_bem_sphere(args):
              pm(res.drag_K_err)),
             ("time", res.timings.get("total_s"), "s", "", ""),
             ("converged", ok, "", "", "" if ok else res.message)]
-    _plot_shape(res, args)
+    _plot_shape(res, args, out)
     return out, format_rows(rows, f"Rigid sphere on the axis of Poiseuille flow (BEM), "
                                   f"a/R = {res.lam:g}")
 
@@ -86,15 +116,17 @@ def _shape_result_json(res, subcommand: str, args) -> dict:
     (physical fields null and no profile rows when the solve failed)."""
     out = {"command": "bem", "subcommand": subcommand, **res.to_dict(shape=False)}
     if args.out:
-        out["files"] = [str(p) for p in res.save(args.out)]
+        files = saved(out, "--out", lambda: res.save(args.out))
+        if files is not None:
+            out["files"] = [str(p) for p in files]
     return out
 
 
-def _plot_shape(res, args) -> None:
-    """--plot FILE: the body's shape in the tube."""
+def _plot_shape(res, args, out: dict) -> None:
+    """--plot FILE: the body's shape in the tube (a failed write recorded in ``out``)."""
     if args.plot:
         from bem.plotting import plot_shape  # lazy: bem off the estimate's start-up
-        save_plot(plot_shape(res), args.plot)
+        saved(out, "--plot", lambda: save_plot(plot_shape(res), args.plot))
 
 
 def _method_and_error(res):
@@ -134,7 +166,7 @@ def cmd_bem_drop(args):
             ("volume error", res.volume_error, "-", "panel quadrature", ""),
             ("time", res.timings.get("total_s"), "s", "", ""),
             ("converged", ok, "", "", "" if ok else res.message)]
-    _plot_shape(res, args)
+    _plot_shape(res, args, out)
     return out, format_rows(rows, f"Clean drop, viscosity ratio 1, on the axis of Poiseuille "
                                   f"flow (BEM): lam = {res.lam:g}, Ca = {res.ca:g}")
 
@@ -175,7 +207,7 @@ def cmd_bem_vesicle(args):
              if math.isfinite(res.volume_error) else None, "-", "panel quadrature", ""),
             ("time", res.timings.get("total_s"), "s", "", ""),
             ("converged", ok, "", "", "" if ok else res.message)]
-    _plot_shape(res, args)
+    _plot_shape(res, args, out)
     return out, format_rows(rows, f"Vesicle, viscosity ratio 1, on the axis of Poiseuille flow "
                                   f"(BEM): nu = {res.nu:g}, lam = {res.lam:g}, "
                                   f"Ca_B = {res.ca_b:g}")
@@ -236,15 +268,17 @@ def cmd_bem_vesicle_sweep(args):
                                       args.ca_b)
         check_vesicle_inputs(args.nu, float(lams[0]), ca_b=args.ca_b, max_time=args.max_time,
                              **solver)
-    done = []
+    done, partial_save = [], {}
 
     def report(i, n, res, seconds):
         """With --out the points so far (saved first: an interrupted sweep keeps its finished
-        points), then one line per point on stderr (not with --json)."""
+        points; after a failed write the sweep goes on without, and the final save decides),
+        then one line per point on stderr (not with --json)."""
         done.append(res)
-        if args.out and i < n:
-            save_sweep(args.out, sorted(done, key=lambda r: r.lam), solver, profiles=False,
-                       complete=False)
+        if args.out and i < n and "not_written" not in partial_save:
+            saved(partial_save, "--out", lambda: save_sweep(
+                args.out, sorted(done, key=lambda r: r.lam), solver, profiles=False,
+                complete=False))
         if not args.json:
             print(f"point {i}/{n}: lam = {res.lam:.6g} (lam/lam_c = {res.lam_ratio:.4f}) "
                   f"{'converged' if res.success else 'NOT CONVERGED'} in {seconds:.1f} s",
@@ -263,10 +297,12 @@ def cmd_bem_vesicle_sweep(args):
         out["message"] = f"{len(results) - out['n_converged']} of {len(results)} points did " \
                          "not converge"
     if args.out:
-        out["files"] = [str(p) for p in save_sweep(args.out, results, solver)]
+        files = saved(out, "--out", lambda: save_sweep(args.out, results, solver))
+        if files is not None:
+            out["files"] = [str(p) for p in files]
     if args.plot:
         from bem.plotting import plot_vesicle_sweep  # lazy: bem off the estimate's start-up
-        save_plot(plot_vesicle_sweep(results), args.plot)
+        saved(out, "--plot", lambda: save_plot(plot_vesicle_sweep(results), args.plot))
     title = (f"Vesicle sweep (BEM), nu = {r0.nu:g}, lam_c = {r0.lam_c:.4g}, Ca_B = "
              f"{r0.ca_b:g}: {out['n_converged']}/{len(results)} points converged; "
              "V/U speed over the mean velocity, dp+ extra pressure drop, h/R smallest gap, "
@@ -280,15 +316,17 @@ def _vesicle_options(p, sweep: bool) -> None:
     p.add_argument("--nu", type=finite_float, required=True, help="reduced volume, 0 < nu < 1 [-]")
     g = p.add_mutually_exclusive_group(required=True)
     many = {"nargs": 3, "metavar": ("A", "B", "N")} if sweep else {}
-    points = "N values (at most 100) from A to B of the " if sweep else ""
+    points = ("N values (2 to 100: each point is a full vesicle solve, seconds to minutes) "
+              "from A to B of the " if sweep else "")
     g.add_argument("--lam", type=finite_float, **many,
                    help=points + "confinement R0/R, 0 < lam < lam_c(nu) [-]")
     g.add_argument("--lam-ratio", type=finite_float, dest="lam_ratio", **many,
                    help=points + "confinement over critical lam/lam_c, 0 < ratio < 1 [-]")
     p.add_argument("--ca-b", type=finite_float, default=50.0, dest="ca_b",
                    help="bending capillary number eta U R0^2/kappa, 0.01 to 1e5 (default 50) [-]")
-    p.add_argument("--n-modes", "--modes", type=positive_int, dest="modes",
-                   help="shape modes of the fine mesh, 8 to 96 (default: automatic refinement)")
+    p.add_argument("--n-modes", "--modes", type=_count(VESICLE_MODES), dest="modes",
+                   help=f"shape modes of the fine mesh, {_range(VESICLE_MODES)} "
+                        "(default: automatic refinement)")
     p.add_argument("--tol", type=finite_float, default=1e-4,
                    help="relative tolerance of the estimated discretisation error of V/U and "
                         "dp+, 1e-12 to 0.5 (default 1e-4) [-]")
@@ -298,8 +336,11 @@ def _vesicle_options(p, sweep: bool) -> None:
     p.add_argument("--residual-tol", type=finite_float, default=1e-3, dest="residual_tol",
                    help="tolerance of the steady residual max|u - V e_x|, 1e-14 to 10 "
                         "(default 1e-3) [U]")
-    p.add_argument("--max-modes", type=positive_int, default=None, dest="max_modes",
-                   help="largest number of shape modes of the automatic refinement, 24 to 96 "
+    # its minimum is 24 for the automatic refinement, 8 with --modes: the solver checks it
+    p.add_argument("--max-modes", type=_count(VESICLE_MAX_MODES, minimum=False), default=None,
+                   dest="max_modes",
+                   help=f"largest number of shape modes of the automatic refinement, "
+                        f"{_range(VESICLE_MAX_MODES)} "
                         "(default 80, or for a long vesicle 40 more than the level where its "
                         "density is re-built, ~6 per tube radius of length)")
     add_max_time_option(p)
@@ -326,8 +367,9 @@ def add_bem_parser(subparsers) -> None:
     s.add_argument("--lam", type=finite_float, required=True, metavar="A_OVER_R",
                    help="sphere radius over tube radius a/R, about 0.05 to 0.996 (smaller and "
                         "nearer contact: refused with the closed-form limits) [-]")
-    s.add_argument("--panels", type=positive_int,
-                   help="sphere panels, >= 3, at most 4000 unknowns per mesh (default: "
+    s.add_argument("--panels", type=_count(SPHERE_PANELS),
+                   help=f"sphere panels, {_range(SPHERE_PANELS)}: {SPHERE_PANELS[1]} for "
+                        "the smallest sphere, fewer as a/R grows (32 at 0.996) (default: "
                         "automatic refinement)")
     s.add_argument("--tol", type=finite_float, default=1e-8,
                    help="relative tolerance of the refinement pair, 1e-14 to 0.1 "
@@ -340,8 +382,9 @@ def add_bem_parser(subparsers) -> None:
                    help="drop volume radius over tube radius R0/R, about 0.01 to < 1 [-]")
     d.add_argument("--ca", type=finite_float, required=True,
                    help="capillary number eta U/gamma, U the mean velocity, 1e-8 to 100 [-]")
-    d.add_argument("--modes", type=positive_int,
-                   help="shape modes of the fine mesh, 6 to 64 (default: automatic refinement)")
+    d.add_argument("--modes", type=_count(DROP_MODES),
+                   help=f"shape modes of the fine mesh, {_range(DROP_MODES)} (default: "
+                        "automatic refinement)")
     d.add_argument("--tol", type=finite_float, default=1e-5,
                    help="relative tolerance of the refinement pair in V/U and dp+, 1e-12 to "
                         "0.1 (default 1e-5) [-]")

@@ -21,16 +21,17 @@ start-up.
 from __future__ import annotations
 
 import csv
+import functools
 import math
 from pathlib import Path
 
 import numpy as np
 
 from lubrication import plotting
-from lubrication.checks import InvalidParameterError, check_positive
+from lubrication.checks import check_positive
 from correlations.cli.contract import (UsageError, add_max_time_option, finite_float, format_rows,
-                                      format_value, positive_int, save_plot)
-from lubrication.io import atomic_write, clean_json
+                                      format_value, positive_int, save_plot, saved)
+from lubrication.io import atomic_write, clean_json, make_folder
 
 #: Option names of the inputs, for the messages of the library's checks.
 OPTION_NAMES = {"nu": "--nu", "lam": "--lam", "lam_ratio": "--lam-ratio", "ca_b": "--ca-b"}
@@ -83,6 +84,9 @@ SWEEP_TABLE = (("lam_ratio", "lam/lam_c", "-", ".4f"), ("lam", "lam", "-", ".4f"
 SWEEP_FROM = 0.5
 SWEEP_TO = 0.999
 SWEEP_POINTS = 50
+#: Points of a sweep, 2 to lubrication.solve.MAX_SWEEP_POINTS (whose comment gives the reason,
+#: also in the help of --points; tests/test_cli.py checks they agree).
+SWEEP_POINTS_RANGE = (2, 2000)
 
 
 def ca_b_type(text: str) -> float:
@@ -124,8 +128,13 @@ def add_parser(sub) -> None:
                         "lowest of the high-Ca model, rounded up, where that is higher)")
     p.add_argument("--to", dest="ratio_to", type=finite_float, default=None,
                    help=f"largest lam/lam_c of the sweep, below 1 [-] (default {SWEEP_TO:g})")
-    p.add_argument("--points", type=positive_int, default=None,
-                   help=f"number of sweep points, 2 to 2000 (default {SWEEP_POINTS})")
+    lo, hi = SWEEP_POINTS_RANGE
+    why = ("at 2000 they are 5e-4 in lam/lam_c apart, the continuation's smallest step, and "
+           "take 10-30 min")
+    p.add_argument("--points", type=functools.partial(positive_int, minimum=lo, maximum=hi,
+                                                      reason=why),
+                   default=None,
+                   help=f"number of sweep points, {lo} to {hi} ({why}) (default {SWEEP_POINTS})")
     add_max_time_option(p)
     p.add_argument("--out", metavar="DIR", help="write the result(s): JSON + CSV (atomic)")
     p.add_argument("--plot", metavar="FILE", help="figure: the shape, or V/U, dp+, film, "
@@ -161,23 +170,26 @@ def cmd_lubrication(args):
     out = {"command": "lubrication", **res.to_dict(), "units": UNITS}
     notes = []
     if args.out:
-        out["files"] = [str(p) for p in res.save(args.out)]
-        if not ok:
-            notes.append("not converged: only the JSON was written (no profiles)")
+        files = saved(out, "--out", lambda: res.save(args.out))
+        if files is not None:
+            out["files"] = [str(p) for p in files]
+            if not ok:
+                notes.append("not converged: only the JSON was written (no profiles)")
     if args.plot:
-        notes += _plot(ok, "shape", res, args.plot, "not converged")
+        notes += _plot(ok, "shape", res, args.plot, "not converged", out)
     title = (f"Lubrication, {_model_label(res.model, res.ca_b)}: "
              + ("converged" if ok else "NOT CONVERGED") + f" - {res.message}")
     return out, "\n".join([format_rows(_single_rows(out, ok), title)] + notes)
 
 
-def _plot(ok: bool, kind: str, what, path, failed: str) -> list[str]:
+def _plot(ok: bool, kind: str, what, path, failed: str, out: dict) -> list[str]:
     """Draw ``what`` (a result for ``kind`` "shape", results for "sweep") to ``path`` when
-    ``ok``; else the note that says why no figure was written."""
+    ``ok`` (a failed write recorded in ``out``); else the note that says why no figure was
+    written."""
     if not ok:
         return [f"{failed}: no figure written to {path}"]
     draw = plotting.plot_shape if kind == "shape" else plotting.plot_sweep
-    save_plot(draw(what), path)
+    saved(out, "--plot", lambda: save_plot(draw(what), path))
     return []
 
 
@@ -204,7 +216,7 @@ def _single_rows(out: dict, success: bool) -> list:
 def _sweep_ratios(args):
     """Checked (from, to, points) of a sweep; the defaults follow the model's range."""
     from lubrication.solve import (  # lazy: scipy.integrate off the estimate's start-up
-        MAX_SWEEP_POINTS, check_inputs, lowest_lam_ratio)
+        check_inputs, lowest_lam_ratio)
     nu = check_inputs(args.nu, lam_ratio=SWEEP_TO, ca_b=args.ca_b, names=OPTION_NAMES)[0]
     ratio_from, ratio_to = args.ratio_from, args.ratio_to
     if ratio_from is None:
@@ -218,13 +230,7 @@ def _sweep_ratios(args):
                                                                      lam_ratio=option))
     if not ratio_from < ratio_to:
         raise UsageError(f"--from {ratio_from:g} --to {ratio_to:g}: --from must be below --to")
-    points = SWEEP_POINTS if args.points is None else args.points
-    if not 2 <= points <= MAX_SWEEP_POINTS:
-        raise InvalidParameterError(
-            "--points", points, f"2 <= --points <= {MAX_SWEEP_POINTS}",
-            "points closer than the continuation's smallest step (5e-4) resolve nothing "
-            "more; split a larger sweep" if points > 2 else
-            "a sweep needs at least 2 points (one point: --lam-ratio)")
+    points = SWEEP_POINTS if args.points is None else args.points    # checked by its type
     return nu, ratio_from, ratio_to, points
 
 
@@ -254,9 +260,11 @@ def _sweep(args):
            "units": {k: UNITS[k] for k in SWEEP_COLUMNS if k in UNITS}, "points": table}
     notes = []
     if args.out:
-        out["files"] = [str(_write_sweep_csv(Path(args.out), results, table))]
+        path = saved(out, "--out", lambda: _write_sweep_csv(Path(args.out), results, table))
+        if path is not None:
+            out["files"] = [str(path)]
     if args.plot:
-        notes += _plot(n_ok, "sweep", results, args.plot, "no point converged")
+        notes += _plot(n_ok, "sweep", results, args.plot, "no point converged", out)
     title = (f"Lubrication sweep: nu = {r0.nu:g}, lam_c = {r0.lam_c:.6g}, "
              f"{_model_label(r0.model, r0.ca_b)}: {n_ok}/{len(results)} points converged")
     if failed:
@@ -294,7 +302,7 @@ def _column(res, key):
 
 def _write_sweep_csv(directory: Path, results, table) -> Path:
     """One row per point, written atomically (temporary file, then rename)."""
-    directory.mkdir(parents=True, exist_ok=True)
+    make_folder(directory)
     r0 = results[0]
     path = directory / f"lubrication_sweep_nu{r0.nu:.4g}_{r0.model}" \
                        f"{'' if r0.model == 'high-Ca' else f'_caB{r0.ca_b:.4g}'}.csv"

@@ -2,16 +2,20 @@
 provenance; and every result writer of the project following that one policy."""
 
 import datetime
+import errno
 import json
 import math
+import os
 import re
+import tempfile
 
 import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
 import lubrication
-from lubrication.io import clean_json, provenance, save_result, write_json
+from lubrication.io import (WriteError, atomic_write, clean_json, make_folder, path_limits,
+                            provenance, save_result, written_files, write_json)
 from lubrication.results import Status
 
 
@@ -67,6 +71,85 @@ def test_written_files_are_atomic_and_csv_cells_of_non_finite_numbers_are_empty(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv", "r.json"]   # no temp files
     assert _strict(jpath.read_text()) == {"a": None, "profile_columns": dict(cols)}
     assert cpath.read_text().splitlines() == ["x,y", "0.0,", f"0.1,{1.0 / 3.0!r}"]
+
+
+# ------------------------------------------------------------------ failed writes
+def _raise(number):
+    def failing(*args, **kwargs):
+        raise OSError(number, os.strerror(number))
+    return failing
+
+
+@pytest.mark.parametrize("module, call, number", [
+    (os, "fsync", errno.ENOSPC),            # the disk is full when the data reach it
+    (tempfile, "mkstemp", errno.EACCES),    # no permission to create a file in the folder
+    (tempfile, "mkstemp", errno.EROFS),     # a read-only file system
+    (os, "replace", errno.EXDEV),           # any failure of the final rename
+], ids=["ENOSPC", "EACCES", "EROFS", "rename"])
+def test_a_failed_write_names_the_file_and_leaves_the_old_one(monkeypatch, tmp_path, module,
+                                                              call, number):
+    """Contract of atomic_write: WriteError with the target as filename and the system's
+    reason; the previous file is untouched; no temporary file is left; not recorded as
+    written."""
+    target = tmp_path / "r.json"
+    target.write_text("old")
+    monkeypatch.setattr(module, call, _raise(number))
+    with pytest.raises(WriteError) as info:
+        atomic_write(target, lambda f: f.write("new"))
+    monkeypatch.undo()
+    assert (info.value.errno, info.value.strerror, info.value.filename) == (
+        number, os.strerror(number), str(target))
+    assert target.read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["r.json"]
+    assert target not in written_files()
+
+
+def test_a_folder_in_place_of_the_file_is_refused_before_writing(tmp_path):
+    (tmp_path / "r.json").mkdir()
+    with pytest.raises(WriteError) as info:
+        atomic_write(tmp_path / "r.json", lambda f: pytest.fail("written into a folder"))
+    assert info.value.errno == errno.EISDIR and info.value.filename == str(tmp_path / "r.json")
+    assert [p.name for p in tmp_path.iterdir()] == ["r.json"]
+
+
+def test_save_result_writes_neither_file_when_one_is_a_folder(tmp_path):
+    """JSON and CSV are a pair: with a folder where the CSV goes, the JSON is not written
+    either."""
+    (tmp_path / "r.csv").mkdir()
+    with pytest.raises(WriteError) as info:
+        save_result(tmp_path, "r", {"a": 1.0}, (("x", "[-]"),), lambda name: [0.0])
+    assert info.value.filename == str(tmp_path / "r.csv")
+    assert [p.name for p in tmp_path.iterdir()] == ["r.csv"]
+
+
+def test_names_at_and_beyond_the_file_systems_limit(tmp_path):
+    """A name of exactly NAME_MAX bytes is written (its temporary file's name is shortened to
+    fit); one byte more is a WriteError naming it (ENAMETOOLONG), with nothing left behind."""
+    name_max, path_max = path_limits(tmp_path)
+    assert name_max >= 14 and path_max > name_max          # os.pathconf answered sensibly
+    at_limit = tmp_path / ("a" * name_max)
+    assert atomic_write(at_limit, lambda f: f.write("ok")).read_text() == "ok"
+    beyond = tmp_path / ("b" * (name_max + 1))
+    with pytest.raises(WriteError) as info:
+        atomic_write(beyond, lambda f: f.write("no"))
+    assert info.value.errno == errno.ENAMETOOLONG and info.value.filename == str(beyond)
+    assert [p.name for p in tmp_path.iterdir()] == [at_limit.name]
+
+
+def test_a_folder_that_cannot_be_made_is_a_write_error(tmp_path):
+    (tmp_path / "file").write_text("")
+    with pytest.raises(WriteError) as info:
+        make_folder(tmp_path / "file" / "sub")
+    assert info.value.filename == str(tmp_path / "file" / "sub")
+
+
+def test_an_interrupt_while_writing_leaves_no_temporary_and_stays_an_interrupt(tmp_path):
+    def interrupted(f):
+        f.write("half")
+        raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(tmp_path / "r.json", interrupted)
+    assert list(tmp_path.iterdir()) == []
 
 
 # ------------------------------------------------------------------ every result writer
