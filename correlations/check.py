@@ -20,7 +20,17 @@ objects or ``{"rows": [...]}``) or a list of dicts; :func:`parse_row` turns one 
 checked :class:`Row` of dimensionless values. An empty cell or null means "not given". Bad input
 (malformed file, unknown or missing column, a number that is not one, a dimensional column
 without what converts it, a column that does not apply to the row's ``kind``) raises
-:class:`InputError` naming the row and the column: nothing is checked silently.
+:class:`InputError` naming the row and the column: nothing is checked silently. Files pass the
+gate of :mod:`correlations.files` (a regular file: a FIFO or a device is refused unread); a CSV
+file is read as a stream, each record at most :data:`MAX_CSV_RECORD_CHARS` characters, a JSON
+file whole, at most :data:`MAX_JSON_ROWS_BYTES` (a larger table goes in CSV).
+
+Any number of rows
+------------------
+:func:`check_summary` checks the rows as they are read and keeps, besides the verdict counts,
+the reports of at most :data:`MAX_LISTED_ROWS` rows (the worst) and about 60 bytes per row for
+the series checks (step 4), which need every row of a series: a million rows take about
+0.1 GB. :func:`check_results` keeps every row.
 
 Checks, in the order they are made (module constants hold the measured numbers)
 ---------------------------------------------------------------------------------
@@ -60,27 +70,33 @@ The row's verdict is its worst check; the report's, its worst row.
 
 from __future__ import annotations
 
+import array
 import csv
 import dataclasses
 import decimal
 import difflib
 import enum
 import functools
-import json
+import heapq
 import math
 import numbers
+import operator
+import os
 import warnings
 from dataclasses import dataclass
-from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
 
 from lubrication import asymptotics
 from lubrication.checks import OUTPUT_BOUNDS, InvalidParameterError, OutOfRangeWarning, check_range
-from lubrication.geometry import (cell_from_volume_area, check_reduced_volume,
+from lubrication.geometry import (NU_MIN, cell_from_volume_area, check_reduced_volume,
                                   confinement_from_diameter, critical_confinement, volume_radius)
 from lubrication.io import provenance
 from bem.solve import check_sphere_inputs, solve_sphere
 
 from .estimate import PHYSICAL_BOUNDS, physical_scales
+from .files import UnreadableFile, check_input_file, open_text, read_json
 from .pressure import dp_plus_film_chen2020
 from .registry import (MAP_DEFAULT_CA_B, SMALL_VESICLE_RANGE, MethodNotApplicable, guarded,
                        map_method_name, map_query, resolve_solution_map)
@@ -93,7 +109,8 @@ __all__ = ["COLUMNS", "ERROR_COLUMNS", "KINDS", "WARN_FACTOR", "Verdict", "Input
            "parse_rows", "map_reference", "near_critical_reference", "small_object_reference",
            "sphere_reference", "drop_reference", "film_upper_bound", "film_lower_bound",
            "length_lower_bound", "chen_film_scaling_check", "shape_volume_area_checks",
-           "trend_checks", "shape_class_check", "check_results", "assert_consistent"]
+           "trend_checks", "shape_class_check", "check_summary", "check_results",
+           "assert_consistent", "MAX_LISTED_ROWS", "MAX_CSV_RECORD_CHARS", "MAX_JSON_ROWS_BYTES"]
 
 KINDS = ("vesicle", "sphere", "drop")
 
@@ -138,6 +155,16 @@ _PHYSICAL_INPUTS = {"volume_fl": "volume_fl", "diameter_um": "diameter_um",
 #: Results given in physical units: dimensionless quantity <- (column, physical_scales key).
 _CONVERTED = {"V_over_U": "V_mm_s", "dp_plus_R0": "dp_plus_Pa", "ell": "length_um",
               "film_min": "film_nm"}
+#: Column sets of :func:`parse_row`: every known column, the text columns, the dimensionless
+#: inputs and outputs, the uncertainties, the columns with a unit, and per kind the columns it
+#: may not have.
+_KNOWN = frozenset(COLUMNS) | frozenset(ERROR_COLUMNS)
+_TEXT_COLUMNS = frozenset(c for c, (role, _) in COLUMNS.items() if role == "text")
+_DIMENSIONLESS = frozenset(c for c, (role, _) in COLUMNS.items() if role in ("input", "output"))
+_ERROR_OF = {f"{c}_err": c for c in COLUMNS if f"{c}_err" in ERROR_COLUMNS}
+_UNIT_COLUMNS = frozenset(c for c, (role, _) in COLUMNS.items() if role.startswith("physical"))
+_NOT_FOR = {kind: frozenset(c for c, kinds in _ONLY_FOR.items() if kind not in kinds)
+            for kind in KINDS}
 #: What each conversion needs besides its column, for the message when it is missing.
 _NEEDS = {"V_mm_s": "U_mm_s", "dp_plus_Pa": "U_mm_s, eta_mpas and the volume radius (volume_fl, "
           "or lam with diameter_um)", "length_um": "the tube diameter (diameter_um, or lam "
@@ -208,11 +235,16 @@ class Verdict(enum.Enum):
 
     @property
     def rank(self) -> int:
-        return ("pass", "warn", "fail").index(self.value)
+        return _RANK[self._value_]
+
+
+_RANK = {"pass": 0, "warn": 1, "fail": 2}
 
 
 def _worst(verdicts) -> Verdict:
-    return max(verdicts, key=lambda v: v.rank, default=Verdict.PASS)
+    verdicts = list(verdicts)
+    return (Verdict.FAIL if Verdict.FAIL in verdicts else Verdict.WARN if Verdict.WARN in
+            verdicts else Verdict.PASS)
 
 
 def _verdict(deviation: float, tolerance: float) -> Verdict:
@@ -247,19 +279,50 @@ def _unknown_column(where: str, name: str) -> InputError:
                       "eta_mpas, kappa_j, V_mm_s, dp_plus_Pa, length_um, film_nm)")
 
 
-def _read_csv(path: Path) -> list[tuple[str, dict]]:
-    try:
-        with path.open(encoding="utf-8-sig", newline="") as f:
-            lines = list(csv.reader(f))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise InputError(str(path), "FILE", str(path), "a readable UTF-8 CSV file",
-                         str(exc)) from None
-    numbered = [(i + 1, cells) for i, cells in enumerate(lines) if any(c.strip() for c in cells)]
-    if not numbered:
-        raise InputError(str(path), "FILE", str(path), "a header row and data rows",
-                         "the file is empty")
-    line, header = numbered[0]
-    header = [h.strip() for h in header]
+#: The name under which messages refer to the input file (the command's argument FILE).
+FILE = "FILE"
+#: What the input file must be (messages).
+_WHAT = "a CSV or JSON file of rows"
+#: Longest record of a CSV file (a line, or the lines of a record whose quoted cell holds line
+#: breaks) [characters]: a row of every column written with 17 digits and a long name has
+#: about 2000. A file of one endless line (a copy of /dev/zero) is refused at this length
+#: instead of being read into memory; it also bounds every cell, below the csv module's own
+#: field limit (131072 characters).
+MAX_CSV_RECORD_CHARS = 65536
+#: Largest JSON file of rows [bytes]. JSON is parsed whole, which takes about five times the
+#: file's size in memory at once (text and objects: 32 MiB, about 100 000 rows, ~170 MB);
+#: larger tables go in a CSV file, which is read row by row.
+MAX_JSON_ROWS_BYTES = 32 * 2**20
+
+
+class _Lines:
+    """The lines of an open text file for :func:`csv.reader`, each record (the lines read
+    since :attr:`record` was last set to 0) at most :data:`MAX_CSV_RECORD_CHARS` characters;
+    :attr:`line` counts the lines read."""
+
+    __slots__ = ("f", "line", "path", "record")
+
+    def __init__(self, f, path):
+        self.f, self.path, self.record, self.line = f, path, 0, 0
+
+    def __iter__(self):
+        return self
+
+    def __next__(self) -> str:
+        text = self.f.readline(MAX_CSV_RECORD_CHARS + 1 - self.record)
+        if not text:
+            raise StopIteration
+        self.line += 1
+        self.record += len(text)
+        if self.record > MAX_CSV_RECORD_CHARS:
+            raise UnreadableFile(FILE, self.path, _WHAT, f"line {self.line} makes a record "
+                                 f"longer than {MAX_CSV_RECORD_CHARS} characters (not a table "
+                                 "of results)")
+        return text
+
+
+def _csv_header(path, line: int, cells: list) -> list[str]:
+    header = [h.strip() for h in cells]
     for k, h in enumerate(header):
         if not h:
             raise InputError(f"{path} header (line {line})", f"#{k + 1}", h,
@@ -270,88 +333,166 @@ def _read_csv(path: Path) -> list[tuple[str, dict]]:
     if len(header) == 1 and (";" in header[0] or "\t" in header[0]):
         raise InputError(f"{path} header (line {line})", header[0], header[0],
                          "comma-separated columns", "the separator must be a comma")
-    rows = []
-    for n, (line, cells) in enumerate(numbered[1:], 1):
-        if len(cells) != len(header):
-            raise InputError(f"row {n} (line {line})", "*", f"{len(cells)} cells",
-                             f"{len(header)} cells, one per header column")
-        rows.append((f"row {n} (line {line})", dict(zip(header, cells))))
-    if not rows:
-        raise InputError(str(path), "FILE", str(path), "data rows after the header",
+    return header
+
+
+def _csv_rows(path):
+    """``(row number, line, cells)`` of each data row of the CSV file ``path``, read as a
+    stream (:func:`correlations.files.open_text`: a regular file; records bounded by
+    :data:`MAX_CSV_RECORD_CHARS`). Blank lines are skipped; ``line`` is where the row starts."""
+    with open_text(path, name=FILE, what=_WHAT) as f:
+        lines = _Lines(f, path)
+        reader = csv.reader(lines)
+        header, n = None, 0
+        while True:
+            start, lines.record = lines.line + 1, 0
+            try:
+                cells = next(reader, None)
+            except (OSError, UnicodeDecodeError, csv.Error) as exc:
+                raise UnreadableFile(FILE, path, _WHAT, f"line {lines.line}: {exc}") from None
+            if cells is None:
+                break
+            if not "".join(cells).strip():
+                continue
+            if header is None:
+                header = _csv_header(path, start, cells)
+                continue
+            n += 1
+            if len(cells) != len(header):
+                raise InputError(f"row {n} (line {start})", "*", f"{len(cells)} cells",
+                                 f"{len(header)} cells, one per header column")
+            yield n, start, dict(zip(header, cells))
+    if header is None:
+        raise InputError(str(path), FILE, str(path), "a header row and data rows",
+                         "the file is empty")
+    if n == 0:
+        raise InputError(str(path), FILE, str(path), "data rows after the header",
                          "no data rows")
-    return rows
 
 
-def _read_json(path: Path) -> list[tuple[str, dict]]:
-    try:
-        data = json.loads(path.read_text(encoding="utf-8-sig"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputError(str(path), "FILE", str(path), "a readable JSON file", str(exc)) from None
-    if isinstance(data, dict) and set(data) >= {"rows"}:
-        data = data["rows"]
-    if not isinstance(data, list):
-        raise InputError(str(path), "FILE", str(path), 'a list of objects or {"rows": [...]}',
-                         f"the top level is a {type(data).__name__}")
-    return _from_list(data, str(path))
-
-
-def _from_list(data, source: str) -> list[tuple[str, dict]]:
+def _list_rows(data, source: str):
+    """``(row number, None, cells)`` of a list of dicts (rows given in Python or read from a
+    JSON file)."""
     if not data:
         raise InputError(source, "rows", "[]", "at least one row")
-    rows = []
     for n, row in enumerate(data, 1):
         if not isinstance(row, dict):
             raise InputError(f"row {n}", "*", type(row).__name__, "an object of column: value")
-        rows.append((f"row {n}", row))
-    return rows
+        yield n, None, row
+
+
+def _json_list(path) -> list:
+    """The rows of a JSON file (:func:`correlations.files.read_json`, at most
+    :data:`MAX_JSON_ROWS_BYTES`)."""
+    check_input_file(path, name=FILE, max_bytes=MAX_JSON_ROWS_BYTES,
+                     what="a JSON file of rows; give a larger table as CSV, which is read row "
+                          "by row")
+    data = read_json(path, name=FILE, what="a JSON file of rows", max_bytes=MAX_JSON_ROWS_BYTES)
+    if isinstance(data, dict) and set(data) >= {"rows"}:
+        data = data["rows"]
+    if not isinstance(data, list):
+        raise InputError(str(path), FILE, str(path), 'a list of objects or {"rows": [...]}',
+                         f"the top level is a {type(data).__name__}")
+    return data
+
+
+def _starts_like_json(path) -> bool:
+    """Whether the text file ``path`` starts (after white space) with ``[`` or ``{``."""
+    with open_text(path, name=FILE, what=_WHAT) as f:
+        try:
+            while True:
+                chunk = f.read(65536)
+                if not chunk or chunk.strip():
+                    return chunk.lstrip()[:1] in ("[", "{")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise UnreadableFile(FILE, path, _WHAT, f"not readable UTF-8 text ({exc})") from None
+
+
+def _where(n: int, line: int | None) -> str:
+    return f"row {n}" if line is None else f"row {n} (line {line})"
+
+
+def _source(source):
+    """``(description, rows, path)`` of ``source`` (:func:`read_rows`): each call ``rows()``
+    starts a pass over ``(row number, line or None, cells)``; a CSV file (``path``) is read
+    again on each pass, JSON and Python rows are held in memory (``path`` None)."""
+    if isinstance(source, (list, tuple)):
+        data = list(source)
+        return f"{len(data)} rows given in Python", lambda: _list_rows(data, "rows"), None
+    path = check_input_file(source, name=FILE, what=_WHAT)
+    suffix = path.suffix.lower()
+    if suffix not in (".csv", ".json"):
+        suffix = ".json" if _starts_like_json(path) else ".csv"
+    if suffix == ".json":
+        data = _json_list(path)
+        return str(path), lambda: _list_rows(data, str(path)), None
+    return str(path), lambda: _csv_rows(path), path
 
 
 def read_rows(source) -> tuple[list[tuple[str, dict]], str]:
     """The raw rows of ``source`` and a description of it.
 
-    ``source``: a CSV file (``.csv``; header row, comma-separated), a JSON file (``.json``: a
-    list of objects or ``{"rows": [...]}``; another extension is read as JSON if it starts with
-    ``[`` or ``{``, else as CSV), or a list of dicts. Returns ``([(where, cells), ...],
-    description)`` with ``where`` naming the row (and the line of a CSV file) for messages.
-    Raises :class:`InputError` for an unreadable or malformed file.
+    ``source``: a CSV file (``.csv``; header row, comma-separated; each record at most
+    :data:`MAX_CSV_RECORD_CHARS` characters), a JSON file (``.json``: a list of objects or
+    ``{"rows": [...]}``, at most :data:`MAX_JSON_ROWS_BYTES`; another extension is read as JSON
+    if it starts with ``[`` or ``{``, else as CSV), or a list of dicts. Returns ``([(where,
+    cells), ...], description)`` with ``where`` naming the row (and the line of a CSV file) for
+    messages. Raises :class:`correlations.files.UnreadableFile` for a file that cannot be read
+    (missing, not a regular file, too large, not UTF-8, not JSON, an endless line) and
+    :class:`InputError` for a malformed table. Holds every row in memory; :func:`check_summary`
+    reads a CSV file row by row.
     """
-    if isinstance(source, (list, tuple)):
-        return _from_list(list(source), "rows"), f"{len(source)} rows given in Python"
-    path = Path(source)
-    if not path.is_file():
-        raise InputError(str(path), "FILE", str(path), "an existing CSV or JSON file",
-                         "no such file" if not path.exists() else "not a file")
-    suffix = path.suffix.lower()
-    if suffix not in (".csv", ".json"):
-        try:
-            head = path.read_text(encoding="utf-8-sig").lstrip()[:1]
-        except (OSError, UnicodeDecodeError) as exc:
-            raise InputError(str(path), "FILE", str(path), "a readable text file",
-                             str(exc)) from None
-        suffix = ".json" if head in ("[", "{") else ".csv"
-    return (_read_json(path) if suffix == ".json" else _read_csv(path)), str(path)
+    description, rows, _ = _source(source)
+    return [(_where(n, line), cells) for n, line, cells in rows()], description
+
+
+#: Largest power of ten of a last written digit whose half is a double.
+_MAX_DIGIT_EXPONENT = 300
+
+
+@functools.lru_cache(maxsize=4096)
+def _decimal(text: str) -> tuple[float, float]:
+    """``(value, half a unit of its last written digit)`` of a number written as ``text``
+    (stripped, not empty); ValueError(expected, hint) when it is not a finite one. Cached: the
+    columns of a table repeat their inputs and uncertainties."""
+    try:
+        value = float(text)
+        if text.isascii() and "_" not in text:
+            # float() took it: [sign] digits [. digits] [e exponent], the Decimal exponent
+            mantissa, _, power = text.partition("e" if "e" in text else "E")
+            dot = mantissa.find(".")
+            exponent = (int(power) if power else 0) - (len(mantissa) - dot - 1 if dot >= 0
+                                                        else 0)
+        else:
+            exponent = decimal.Decimal(text).as_tuple().exponent
+    except (ValueError, decimal.InvalidOperation):
+        raise ValueError("a number", "write a decimal point, not a comma" if "," in text
+                         else "") from None
+    if not math.isfinite(value):
+        raise ValueError("a finite number", "NaN and infinity are not accepted; leave the cell "
+                         "empty for a value not given")
+    if exponent > _MAX_DIGIT_EXPONENT:
+        raise ValueError(f"a number whose last written digit is at most "
+                         f"1e{_MAX_DIGIT_EXPONENT}", "its rounding is beyond double precision")
+    return value, 0.5 * 10.0 ** exponent
 
 
 def _number(where: str, column: str, cell):
     """``(value, half a unit of its last written digit)``, or None for an empty cell."""
-    if cell is None:
+    if cell.__class__ is str:
+        text = cell.strip()
+        if text == "":
+            return None
+    elif cell is None:
         return None
-    if isinstance(cell, bool) or not isinstance(cell, (numbers.Real, str)):
+    elif isinstance(cell, bool) or not isinstance(cell, numbers.Real):
         raise InputError(where, column, cell, "a number")
-    text = (cell.strip() if isinstance(cell, str) else str(int(cell))
-            if isinstance(cell, numbers.Integral) else repr(float(cell)))
-    if text == "":
-        return None
+    else:
+        text = str(int(cell)) if isinstance(cell, numbers.Integral) else repr(float(cell))
     try:
-        value = float(text)
-        digits = decimal.Decimal(text).as_tuple()
-    except (ValueError, decimal.InvalidOperation):
-        hint = "write a decimal point, not a comma" if "," in text else ""
-        raise InputError(where, column, text, "a number", hint) from None
-    if not math.isfinite(value):
-        raise InputError(where, column, text, "a finite number", "NaN and infinity are not "
-                         "accepted; leave the cell empty for a value not given")
-    return value, 0.5 * 10.0 ** digits.exponent
+        return _decimal(text)
+    except ValueError as exc:
+        raise InputError(where, column, text, *exc.args) from None
 
 
 # --------------------------------------------------------------------------- one row
@@ -413,6 +554,10 @@ def _convert_physical(where: str, kind: str, cells: dict, raw: dict, values: dic
     """Add to ``values`` and ``errors`` the dimensionless quantities given by physical columns
     (:data:`COLUMNS`, :func:`correlations.estimate.physical_scales`); returns their names.
     ``raw``: column -> (value, rounding) of the row's numbers."""
+    if _UNIT_COLUMNS.isdisjoint(raw):
+        if values.get("lam", 1.0) <= 0:
+            raise InputError(where, "lam", cells["lam"], "lam > 0")
+        return []
     physical = {c: raw[c][0] for c in _PHYSICAL_INPUTS if c in raw}
     with _Named(where, {v: k for k, v in _PHYSICAL_INPUTS.items() if v}):
         for column, bound_name in _PHYSICAL_INPUTS.items():
@@ -481,55 +626,71 @@ def parse_row(cells: dict, index: int = 1, where: str | None = None,
     :class:`InputError` naming the row and the column for anything it cannot use.
     """
     where = where or f"row {index}"
-    for column in cells:
-        if column not in COLUMNS and column not in ERROR_COLUMNS:
-            raise _unknown_column(where, str(column))
+    return Row(index, where, *_parse(cells, where, required), dict(cells))
+
+
+def _parse(cells: dict, where: str, required: dict | None = None) -> tuple:
+    """:func:`parse_row` without the :class:`Row`: ``(kind, name, values, errors,
+    converted)``."""
+    if not _KNOWN.issuperset(cells):
+        for column in cells:
+            if column not in _KNOWN:
+                raise _unknown_column(where, str(column))
     kind = _text(where, "kind", cells.get("kind"), KINDS) or "vesicle"
     name = _text(where, "name", cells.get("name")) or ""
     shape = _text(where, "shape_class", cells.get("shape_class"), ("bullet", "parachute"))
-    raw = {c: _number(where, c, v) for c, v in cells.items()
-           if COLUMNS.get(c, ("number",))[0] != "text"}
-    raw = {c: v for c, v in raw.items() if v is not None}
-    for column in (*raw, *(["shape_class"] if shape else [])):
-        allowed = _ONLY_FOR.get(column.removesuffix("_err"), KINDS)
-        if kind not in allowed:
-            hint = ("ca is a drop's capillary number: set kind=drop for a drop"
-                    if column == "ca" else f"it applies to kind={' or '.join(allowed)} only")
-            raise InputError(where, column, cells[column], f"no {column} for kind={kind}", hint)
-    for column, (value, _) in raw.items():
-        if column.endswith("_err"):
-            if column[:-4] not in raw:
-                raise InputError(where, column, value, f"a {column[:-4]} column beside it",
-                                 "an uncertainty without its value")
-            if value < 0:
-                raise InputError(where, column, value, "an uncertainty >= 0")
-    values = {c: v for c, (v, _) in raw.items() if COLUMNS.get(c, ("",))[0] in ("input", "output")}
-    errors = {c: raw[f"{c}_err"][0] if f"{c}_err" in raw else rounding
-              for c, (_, rounding) in raw.items() if not c.endswith("_err")}
+    raw, values, errors, stated = {}, {}, {}, []
+    for c, v in cells.items():
+        if c not in _TEXT_COLUMNS:
+            number = _number(where, c, v)
+            if number is not None:
+                raw[c] = number
+                if c in _ERROR_OF:
+                    stated.append(c)
+                else:
+                    if c in _DIMENSIONLESS:
+                        values[c] = number[0]
+                    errors[c] = number[1]
+    if not _NOT_FOR[kind].isdisjoint(raw) or (shape and "shape_class" in _NOT_FOR[kind]):
+        for column in (*raw, *(["shape_class"] if shape else [])):
+            allowed = _ONLY_FOR.get(column, KINDS)
+            if kind not in allowed:
+                hint = ("ca is a drop's capillary number: set kind=drop for a drop"
+                        if column == "ca" else f"it applies to kind={' or '.join(allowed)} only")
+                raise InputError(where, column, cells[column], f"no {column} for kind={kind}",
+                                 hint)
+    for column in stated:
+        value, base = raw[column][0], _ERROR_OF[column]
+        if base not in raw:
+            raise InputError(where, column, value, f"a {base} column beside it",
+                             "an uncertainty without its value")
+        if value < 0:
+            raise InputError(where, column, value, "an uncertainty >= 0")
+        errors[base] = value
     converted = _convert_physical(where, kind, cells, raw, values, errors)
     for column in (required or REQUIRED)[kind]:
-        if column == "dp_plus_R0" and "dp_plus_R" in values:
-            continue
-        if column not in values:
+        if column not in values and not (column == "dp_plus_R0" and "dp_plus_R" in values):
             source = {"nu": " (or volume_fl and area_um2)", "lam": " (or volume_fl and "
                       "diameter_um)", "V_over_U": " (or V_mm_s and U_mm_s)",
                       "dp_plus_R0": " (or dp_plus_R, or dp_plus_Pa)"}.get(column, "")
             hint = " (a drop? set kind=drop)" if column == "nu" else ""
             raise InputError(where, column, None, f"a value{source}", f"required for a {kind}"
                              + hint)
-    with _Named(where, {}):
-        if "nu" in values:
-            check_reduced_volume(values["nu"])
-            if kind == "sphere" and values["nu"] != 1.0:
-                raise InputError(where, "nu", cells.get("nu"), "1 for a sphere (or no nu)")
-        for column in ("ca_b", "ca"):
-            if column in values and values[column] <= 0:
-                raise InputError(where, column, cells[column], f"{column} > 0")
+    nu = values.get("nu")
+    if nu is not None:
+        if not NU_MIN <= nu <= 1.0:
+            with _Named(where, {}):
+                check_reduced_volume(nu)
+        if kind == "sphere" and nu != 1.0:
+            raise InputError(where, "nu", cells.get("nu"), "1 for a sphere (or no nu)")
+    for column in ("ca_b", "ca"):
+        if column in values and values[column] <= 0:
+            raise InputError(where, column, cells[column], f"{column} > 0")
     if kind == "sphere":
         values["nu"], errors["nu"] = 1.0, 0.0
     if shape:
         values["shape_class"] = shape
-    return Row(index, where, kind, name, values, errors, tuple(converted), dict(cells))
+    return kind, name, values, errors, tuple(converted)
 
 
 def parse_rows(source) -> list[Row]:
@@ -539,6 +700,13 @@ def parse_rows(source) -> list[Row]:
 
 
 # --------------------------------------------------------------------------- references
+
+@functools.lru_cache(maxsize=4096)
+def _lam_c(nu: float) -> float:
+    """:func:`lubrication.geometry.critical_confinement` of a float, cached: every check of a
+    row needs it, and a table repeats its ν."""
+    return float(critical_confinement(nu))
+
 
 @dataclass(frozen=True)
 class Reference:
@@ -584,10 +752,19 @@ def map_reference(nu: float, lam: float, ca_b: float, quantity: str,
     ``quantity``: ``V_over_U``, ``dp_plus_R0``, ``ell``, ``film_min`` or ``shape_class``;
     ``solution_map`` as in :func:`check_results`.
     """
-    m = _resolve_map(solution_map)
-    if isinstance(m, _NoMap):
-        return str(m)
-    ratio = lam / float(critical_confinement(nu))
+    return _map_ref(nu, lam, ca_b, quantity, _resolve_map(solution_map))
+
+
+def _map_ref(nu: float, lam: float, ca_b: float, quantity: str, m) -> Reference | str:
+    """:func:`map_reference` on the resolved map ``m`` (or why there is none)."""
+    return str(m) if isinstance(m, _NoMap) else _map_reference(nu, lam, ca_b, quantity, m)
+
+
+@functools.lru_cache(maxsize=1024)
+def _map_reference(nu: float, lam: float, ca_b: float, quantity: str, m) -> Reference | str:
+    """:func:`map_reference` on the resolved map ``m``, cached as the map's queries are
+    (:func:`correlations.registry.map_query`): rows of a table often repeat their case."""
+    ratio = lam / _lam_c(nu)
     reason = outside_reason(m, nu, ratio, ca_b)
     if reason:
         return f"outside the solution map ({reason})"
@@ -630,7 +807,7 @@ def near_critical_reference(nu: float, lam: float, quantity: str) -> Reference |
     """
     if quantity not in ("V_over_U", "dp_plus_R0"):
         return f"no near-critical law for {quantity}"
-    delta = 1.0 - lam / float(critical_confinement(nu))
+    delta = 1.0 - lam / _lam_c(nu)
     hi = asymptotics.NEAR_CRITICAL_RANGE.bounds[0][2]
     if delta > hi:
         return f"not near lam_c (delta={delta:.3g} > {hi:g})"
@@ -788,7 +965,7 @@ def film_upper_bound(nu: float, lam: float) -> float:
     >>> round(film_upper_bound(0.6, 1.94), 4)
     0.0208
     """
-    return 1.0 - lam / float(critical_confinement(nu))
+    return 1.0 - lam / _lam_c(nu)
 
 
 def film_lower_bound(nu: float, lam: float) -> float:
@@ -816,12 +993,12 @@ def length_lower_bound(lam: float, film: float = 0.0) -> float:
 
 # --------------------------------------------------------------------------- checks
 
-@dataclass(frozen=True)
-class CheckResult:
+class CheckResult(NamedTuple):
     """One check of one row: ``value`` of the row, ``reference`` (a bound or a reference
     value), ``deviation`` = value − reference (signed, in the value's unit), ``tolerance`` (the
     absolute deviation that still passes), the reference's ``source`` and ``why`` it is valid
-    for the row, and a ``note``."""
+    for the row, and a ``note``. A named tuple (immutable, as a frozen dataclass, and made in
+    a quarter of its time: a row has a dozen checks, a table up to millions of rows)."""
     name: str
     quantity: str
     verdict: Verdict
@@ -834,9 +1011,13 @@ class CheckResult:
     note: str = ""
 
     def to_dict(self) -> dict:
-        out = dataclasses.asdict(self)
-        out["verdict"] = self.verdict.value
-        return out
+        return {"name": self.name, "quantity": self.quantity, "verdict": self.verdict.value,
+                "value": self.value, "reference": self.reference, "deviation": self.deviation,
+                "tolerance": self.tolerance, "source": self.source, "why": self.why,
+                "note": self.note}
+
+
+_VERDICT_OF = operator.attrgetter("verdict")
 
 
 def _bound(name: str, quantity: str, value: float, bound: float, err: float, *, upper: bool,
@@ -854,8 +1035,11 @@ def _bound(name: str, quantity: str, value: float, bound: float, err: float, *, 
 
 def _worse(a: CheckResult, b: CheckResult) -> CheckResult:
     """Of two checks of one value against its two bounds, the one to report: the worse
-    verdict, else the nearer bound."""
-    return min((a, b), key=lambda c: (-c.verdict.rank, abs(c.deviation)))
+    verdict, else the nearer bound (``a`` on a tie)."""
+    ra, rb = a.verdict.rank, b.verdict.rank
+    if ra != rb:
+        return a if ra > rb else b
+    return a if abs(a.deviation) <= abs(b.deviation) else b
 
 
 def _compare(name: str, quantity: str, value: float, err: float, ref: Reference,
@@ -872,66 +1056,69 @@ def _dp(row: Row) -> tuple[str, float, float, float]:
     """The row's extra pressure drop as given: (column, value, uncertainty, factor from
     Δp⁺R0/(ηU) to it), dp_plus_R0 when given, else dp_plus_R."""
     key = "dp_plus_R0" if "dp_plus_R0" in row.values else "dp_plus_R"
-    factor = 1.0 if key == "dp_plus_R0" else 1.0 / row.get("lam")
+    factor = 1.0 if key == "dp_plus_R0" else 1.0 / row.values["lam"]
     return key, row.values[key], row.errors[key], factor
 
 
-def _dp_R0(row: Row) -> tuple[float, float]:
-    """Δp⁺R0/(ηU) and its uncertainty (from dp_plus_R with λ's rounding when only it is given)."""
-    key, value, err, _ = _dp(row)
-    if key == "dp_plus_R0":
-        return value, err
-    lam = row.get("lam")
-    return value * lam, err * lam + abs(value) * row.errors.get("lam", 0.0)
+def _dp_R0(values: dict, errors: dict) -> tuple[float, float]:
+    """Δp⁺R0/(ηU) and its uncertainty of a row's ``values`` and ``errors`` (from dp_plus_R with
+    λ's rounding when only it is given)."""
+    if "dp_plus_R0" in values:
+        return values["dp_plus_R0"], errors["dp_plus_R0"]
+    lam, value, err = values["lam"], values["dp_plus_R"], errors["dp_plus_R"]
+    return value * lam, err * lam + abs(value) * errors.get("lam", 0.0)
+
+
+#: Texts of the hard bounds (:func:`_bound_checks`).
+_LAM_WHY = {"sphere": "geometry: a rigid sphere fits the tube only if a < R",
+            "vesicle": "geometry: lam >= lam_c: the vesicle cannot pass this tube intact"}
+_V_BOUNDS = OUTPUT_BOUNDS["V_over_U"]
+_V_WHY = (_V_BOUNDS[2], _V_BOUNDS[2] + "; a finite object lags the centreline")
+_DP_WHY = OUTPUT_BOUNDS["dp_plus_R0"][2] + "; positive for a finite object"
+_FILM_TOP = {"vesicle": (False, "h/R <= 1 - lam/lam_c (film_upper_bound)",
+                         ("a membrane of this area and volume fits only a tube of radius above "
+                          "R0/lam_c")),
+             "other": (True, "h/R < 1", "the object has a size")}
 
 
 def _bound_checks(row: Row) -> tuple[list[CheckResult], bool]:
     """The hard bounds of the module docstring; returns (checks, whether the object passes the
     tube so that references apply)."""
     v, e, checks = row.values, row.errors, []
-    lam, nu = v["lam"], v.get("nu", 1.0)
+    lam, nu, kind = v["lam"], v.get("nu", 1.0), row.kind
     passes = True
-    if row.kind != "drop":
-        lam_c = float(critical_confinement(nu))
-        what = ("a rigid sphere fits the tube only if a < R" if row.kind == "sphere" else
-                "lam >= lam_c: the vesicle cannot pass this tube intact")
+    if kind != "drop":
         # no warning zone: at or beyond lam_c as given, nothing else can be checked
-        c = _bound("lam < lam_c", "lam", lam, lam_c, 0.0, upper=True, strict=True,
+        c = _bound("lam < lam_c", "lam", lam, _lam_c(nu), 0.0, upper=True, strict=True,
                    source="critical confinement, Chen et al. 2020 eq. critic",
-                   why=f"geometry: {what}")
+                   why=_LAM_WHY[kind])
         checks.append(c)
         passes = c.verdict is Verdict.PASS
-    lo, hi, reason = OUTPUT_BOUNDS["V_over_U"]
+    lo, hi, _ = _V_BOUNDS
     V, eV = v["V_over_U"], e["V_over_U"]
-    below = _bound("1 <= V/U < 2", "V_over_U", V, lo, eV, upper=False, strict=False,
-                   source="bound of Poiseuille flow", why=reason)
-    above = _bound("1 <= V/U < 2", "V_over_U", V, hi, eV, upper=True, strict=True,
-                   source="bound of Poiseuille flow", why=reason + "; a finite object lags the "
-                   "centreline")
-    checks.append(_worse(below, above))
+    checks.append(_worse(
+        _bound("1 <= V/U < 2", "V_over_U", V, lo, eV, upper=False, strict=False,
+               source="bound of Poiseuille flow", why=_V_WHY[0]),
+        _bound("1 <= V/U < 2", "V_over_U", V, hi, eV, upper=True, strict=True,
+               source="bound of Poiseuille flow", why=_V_WHY[1])))
     for key in ("dp_plus_R0", "dp_plus_R"):
         if key in v:
             checks.append(_bound("dp+ > 0", key, v[key], 0.0, e[key], upper=False, strict=True,
-                                 source="sign of the extra dissipation",
-                                 why=OUTPUT_BOUNDS["dp_plus_R0"][2] + "; positive for a finite "
-                                 "object"))
+                                 source="sign of the extra dissipation", why=_DP_WHY))
     film = v.get("film_min")
     if film is not None:
-        if row.kind == "vesicle":
-            top, strict, top_source, why = (
-                film_upper_bound(nu, lam), False, "h/R <= 1 - lam/lam_c (film_upper_bound)",
-                "a membrane of this area and volume fits only a tube of radius above R0/lam_c")
-        else:
-            top, strict, top_source, why = 1.0, True, "h/R < 1", "the object has a size"
-        low = _bound("0 < h/R <= bound", "film_min", film, 0.0, e["film_min"], upper=False,
-                     strict=True, source="h/R > 0", why="a steady object does not touch the wall")
-        high = _bound("0 < h/R <= bound", "film_min", film, top, e["film_min"], upper=True,
-                      strict=strict, source=top_source, why=why)
-        checks.append(_worse(low, high))
-        if row.kind == "vesicle":
+        strict, top_source, why = _FILM_TOP["vesicle" if kind == "vesicle" else "other"]
+        top = film_upper_bound(nu, lam) if kind == "vesicle" else 1.0
+        err = e["film_min"]
+        checks.append(_worse(
+            _bound("0 < h/R <= bound", "film_min", film, 0.0, err, upper=False, strict=True,
+                   source="h/R > 0", why="a steady object does not touch the wall"),
+            _bound("0 < h/R <= bound", "film_min", film, top, err, upper=True, strict=strict,
+                   source=top_source, why=why)))
+        if kind == "vesicle":
             checks.append(_bound("h/R >= 1 - sqrt(2) lam_A", "film_min", film,
-                                 film_lower_bound(nu, lam), e["film_min"], upper=False,
-                                 strict=False, source="film_lower_bound",
+                                 film_lower_bound(nu, lam), err, upper=False, strict=False,
+                                 source="film_lower_bound",
                                  why="both faces of the membrane cover its widest disc"))
     ell = v.get("ell")
     if ell is not None:
@@ -949,6 +1136,15 @@ def _bound_checks(row: Row) -> tuple[list[CheckResult], bool]:
     return checks, passes
 
 
+@functools.lru_cache(maxsize=1024)
+def _chen_film_slope(lam: float, delta: float) -> float:
+    """Chen et al.'s Δp⁺R0/(ηU) ≈ (3/2)λℓ/δ per unit ℓ (:func:`dp_plus_film_chen2020`, linear
+    in ℓ), cached per (λ, δ): rows of a table often repeat their case."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutOfRangeWarning)
+        return float(dp_plus_film_chen2020(lam, 1.0, delta))
+
+
 def chen_film_scaling_check(row: Row) -> CheckResult | str:
     r"""Δp⁺R0/(ηU) against Chen et al. 2020's correlation (3/2)λℓ/δ (fig. dpa_film), with
     δ = 1 − λ/λc (their eq. sfilm2: the film at the vesicle's midplane to leading order; the
@@ -956,17 +1152,16 @@ def chen_film_scaling_check(row: Row) -> CheckResult | str:
     Valid for 0.02 ≤ δ ≤ 0.1 (:data:`CHEN_FILM_SCALING_RANGE`) with tolerance
     :data:`CHEN_FILM_SCALING_RTOL` × the correlation (the scatter of our converged solutions).
     A vesicle row with ℓ; returns the reason (str) when it does not apply."""
-    nu, lam, ell = row.get("nu"), row.get("lam"), row.get("ell")
+    v = row.values
+    nu, lam, ell = v.get("nu"), v["lam"], v.get("ell")
     if row.kind != "vesicle" or nu >= 1.0 or ell is None or ell <= 0:
         return "needs a vesicle with ell"
-    delta = 1.0 - lam / float(critical_confinement(nu))
+    delta = 1.0 - lam / _lam_c(nu)
     lo, hi = CHEN_FILM_SCALING_RANGE
     if not lo <= delta <= hi:
         return f"Chen et al.'s (3/2) lam ell/delta holds for {lo:g} <= delta <= {hi:g}"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", OutOfRangeWarning)
-        pred = float(dp_plus_film_chen2020(lam, ell, delta))
-    value, err = _dp_R0(row)
+    pred = _chen_film_slope(lam, delta) * ell
+    value, err = _dp_R0(row.values, row.errors)
     tol = CHEN_FILM_SCALING_RTOL * pred + err + pred * row.errors["ell"] / ell
     return CheckResult("dp+ vs (3/2) lam ell/delta", "dp_plus_R0", _verdict(value - pred, tol),
                        value, pred, value - pred, tol,
@@ -988,10 +1183,11 @@ def shape_volume_area_checks(row: Row) -> list[CheckResult] | str:
     uncertainties of ℓ and h are propagated. A vesicle row with ℓ and h; returns the reason
     (str) when it does not apply.
     """
-    nu, lam, ell, h = row.get("nu"), row.get("lam"), row.get("ell"), row.get("film_min")
+    v = row.values
+    nu, lam, ell, h = v.get("nu"), v["lam"], v.get("ell"), v.get("film_min")
     if row.kind != "vesicle" or nu >= 1.0 or ell is None or h is None or not 0 <= h < 1:
         return "needs a vesicle with ell and film_min"
-    delta = 1.0 - lam / float(critical_confinement(nu))
+    delta = 1.0 - lam / _lam_c(nu)
     if not 0.0 < delta <= SHAPE_RANGE_DELTA:
         return f"the spherocylinder bands hold for delta <= {SHAPE_RANGE_DELTA:g}"
     rho, lam_a2 = 1.0 - h, lam**2 * nu ** (-2.0 / 3.0)
@@ -1019,11 +1215,11 @@ def shape_class_check(row: Row, solution_map=None) -> CheckResult | str:
     (:data:`correlations.shape.SHAPE_CLASS_RANGE_CHEN2020`): a disagreement is judged by the
     distance ν − ν_T with tolerance :data:`TRANSITION_BAND_NU` (where our map's transitions
     lie; both shapes occur near the line)."""
-    given = row.get("shape_class")
+    v = row.values
+    given = v.get("shape_class")
     if given is None:
         return "no shape_class given"
-    nu, lam = row.get("nu"), row.get("lam")
-    ca_b = row.get("ca_b", DEFAULT_CA_B)
+    nu, lam, ca_b = v.get("nu"), v["lam"], v.get("ca_b", DEFAULT_CA_B)
     ref = map_reference(nu, lam, ca_b, "shape_class", solution_map)
     if isinstance(ref, Reference):
         verdict = Verdict.PASS if given == ref.value else Verdict.FAIL
@@ -1040,7 +1236,7 @@ def shape_class_check(row: Row, solution_map=None) -> CheckResult | str:
     why = (f"inside its range; a disagreement is judged by the distance nu - nu_T to the line, "
            f"tolerance {TRANSITION_BAND_NU:g} (where our map's transitions lie)")
     if (verdict is Verdict.FAIL and given == "bullet"
-            and lam < ELONGATED_BRANCH_LAM_RATIO * float(critical_confinement(nu))):
+            and lam < ELONGATED_BRANCH_LAM_RATIO * _lam_c(nu)):
         verdict = Verdict.WARN
         why += (f"; below lam/lam_c = {ELONGATED_BRANCH_LAM_RATIO:g} an elongated bullet branch "
                 "is also steady (our map build), Chen et al. found parachutes")
@@ -1056,6 +1252,45 @@ _TRENDS = (("V_over_U", -1, "V/U decreases with lam"),
            ("dp_plus_R0", +1, "dp+R0 increases with lam"))
 
 
+def _series_key(kind: str, values: dict):
+    """The series of a row of ``kind`` and ``values`` (:func:`trend_checks`), None for a
+    drop."""
+    if kind == "drop":
+        return None
+    ca_b = values.get("ca_b")
+    return kind, round(values["nu"], 9), None if ca_b is None else round(ca_b, 9)
+
+
+def _series_values(values: dict, errors: dict) -> tuple:
+    """(λ, V/U, its uncertainty, Δp⁺R0/(ηU), its uncertainty): what a trend check needs of a
+    row's ``values`` and ``errors``."""
+    return (values["lam"], values["V_over_U"], errors["V_over_U"], *_dp_R0(values, errors))
+
+
+def _trend_rank(step, tol):
+    """Rank (0 pass, 1 warn, 2 fail) of a step along the trend (> 0: with it) whose two rows
+    have the uncertainties ``tol`` together: a step against the trend warns within ``tol``
+    (and a zero step with ``tol`` > 0), fails beyond. Floats or arrays."""
+    warn = (-step < tol) | ((step == 0) & (tol > 0))
+    return (step <= 0) * (2 - warn)
+
+
+_BY_RANK = (Verdict.PASS, Verdict.WARN, Verdict.FAIL)
+
+
+def _trend_pair(a: tuple, a_where: str, b: tuple) -> list[CheckResult]:
+    """The trend checks of a row (series values ``b``) against the previous row of its series
+    (values ``a``, named ``a_where``); values as :func:`_series_values`."""
+    out = []
+    for (quantity, sign, name), k in zip(_TRENDS, (1, 3)):
+        va, ea, vb, eb = a[k], a[k + 1], b[k], b[k + 1]
+        verdict = _BY_RANK[_trend_rank(sign * (vb - va), ea + eb)]
+        out.append(CheckResult(name, quantity, verdict, vb, va, vb - va, ea + eb,
+                               f"{a_where} (lam={a[0]:.4g})",
+                               "series at fixed nu and Ca_B: a larger object in the same tube"))
+    return out
+
+
 def trend_checks(rows) -> dict:
     r"""Monotonicity along each series: rows of kind vesicle sharing ν and Ca_B (or both
     without Ca_B), and the rigid spheres, sorted by λ. A larger object in the same tube moves
@@ -1063,35 +1298,21 @@ def trend_checks(rows) -> dict:
     figs. vel and dpa; every line of our map). A pair of rows against the trend fails, or warns
     when the step is within the two rows' uncertainties. Drops are not checked (the trends
     with λ at fixed Ca are not established for them). Returns {row index: [CheckResult of the
-    row against the previous one of its series]}.
+    row against the previous one of its series]}; :func:`check_summary` makes the same checks
+    from a compact copy of the series values.
     """
     series = {}
     for row in rows:
-        if row.kind == "drop":
-            continue
-        ca_b = row.get("ca_b")
-        key = (row.kind, round(row.get("nu"), 9), None if ca_b is None else round(ca_b, 9))
-        series.setdefault(key, []).append(row)
+        key = _series_key(row.kind, row.values)
+        if key is not None:
+            series.setdefault(key, []).append(row)
     out = {}
     for members in series.values():
         members = sorted(members, key=lambda r: r.get("lam"))
         for a, b in zip(members, members[1:]):
-            if b.get("lam") <= a.get("lam"):
-                continue
-            for quantity, sign, name in _TRENDS:
-                if quantity == "dp_plus_R0":
-                    (va, ea), (vb, eb) = _dp_R0(a), _dp_R0(b)
-                else:
-                    va, ea, vb, eb = a.get(quantity), a.errors[quantity], b.get(quantity), \
-                        b.errors[quantity]
-                step = sign * (vb - va)
-                verdict = (Verdict.PASS if step > 0 else
-                           Verdict.WARN if -step < ea + eb or (step == 0 and ea + eb > 0)
-                           else Verdict.FAIL)
-                out.setdefault(b.index, []).append(CheckResult(
-                    name, quantity, verdict, vb, va, vb - va, ea + eb,
-                    f"{a.where} (lam={a.get('lam'):.4g})",
-                    "series at fixed nu and Ca_B: a larger object in the same tube"))
+            if b.get("lam") > a.get("lam"):
+                out[b.index] = _trend_pair(_series_values(a.values, a.errors), a.where,
+                                           _series_values(b.values, b.errors))
     return out
 
 
@@ -1105,9 +1326,12 @@ class RowReport:
     checks: tuple
     notes: tuple = ()
 
+    def __post_init__(self):
+        object.__setattr__(self, "_verdict", _worst(map(_VERDICT_OF, self.checks)))
+
     @property
     def verdict(self) -> Verdict:
-        return _worst(c.verdict for c in self.checks)
+        return self._verdict
 
     def to_dict(self) -> dict:
         return {"row": self.row.index, "where": self.row.where, "name": self.row.name,
@@ -1117,10 +1341,28 @@ class RowReport:
                 "checks": [c.to_dict() for c in self.checks], "notes": list(self.notes)}
 
 
+#: Most rows a summary lists (:func:`check_summary`: table, JSON, report): the failing rows
+#: first, then those with warnings, then passing ones, each in file order. A table of
+#: results has hundreds of rows; a million would make a JSON object of gigabytes.
+MAX_LISTED_ROWS = 1000
+#: Most failed checks quoted one per line (``failures`` of the JSON output).
+MAX_FAILURE_LINES = 20
+
+
+def _failure_line(r: RowReport, c: CheckResult) -> str:
+    """One failed (or warning) check of a row, on one line."""
+    return (f"{r.row.where}{' ' + r.row.name if r.row.name else ''}: {c.name} "
+            f"{c.verdict.value.upper()}: value {format_cell(c.value)}, reference "
+            f"{format_cell(c.reference)} ({c.source}), deviation {format_cell(c.deviation)}, "
+            f"tolerance {format_cell(c.tolerance)}")
+
+
 @dataclass(frozen=True)
 class CheckReport:
-    """Result of :func:`check_results`: one :class:`RowReport` per input row, where the rows
-    came from, the map used, the assumptions made and provenance."""
+    """Result of :func:`check_results` or :func:`check_summary`: the :class:`RowReport` of every
+    row or of the rows listed (:data:`MAX_LISTED_ROWS`), the verdict counts of every row
+    (``counts``: pass, warn, fail; computed from ``rows`` when not given), where the rows came
+    from, the map used, the assumptions made and provenance."""
     rows: tuple
     source: str
     map_source: str
@@ -1128,29 +1370,63 @@ class CheckReport:
     provenance: dict = dataclasses.field(default_factory=dict)
     #: the map the references were read from (a SolutionMap, or why there was none)
     solution_map: object = dataclasses.field(default=None, repr=False, compare=False)
+    counts: dict = None
+
+    def __post_init__(self):
+        if self.counts is None:
+            object.__setattr__(self, "counts", {v.value: sum(r.verdict is v for r in self.rows)
+                                                for v in Verdict})
 
     @property
     def verdict(self) -> Verdict:
-        return _worst(r.verdict for r in self.rows)
+        return (Verdict.FAIL if self.counts["fail"] else Verdict.WARN if self.counts["warn"]
+                else Verdict.PASS)
 
     @property
-    def counts(self) -> dict:
-        return {v.value: sum(r.verdict is v for r in self.rows) for v in Verdict}
+    def n_rows(self) -> int:
+        """Number of rows checked."""
+        return sum(self.counts.values())
+
+    @property
+    def omitted(self) -> int:
+        """Number of rows checked but not listed in ``rows``."""
+        return self.n_rows - len(self.rows)
+
+    def listing(self) -> str:
+        """Which rows ``rows`` holds, in a sentence ("" when it holds every row)."""
+        if not self.omitted:
+            return ""
+        listed = {v.value: sum(r.verdict is v for r in self.rows) for v in Verdict}
+        left = ", ".join(f"{self.counts[v] - listed[v]} {v}" for v in listed)
+        return (f"{len(self.rows)} of the {self.n_rows} rows are listed (failing rows first, "
+                f"then rows with warnings, then passing rows, each in file order); the other "
+                f"{self.omitted} rows ({left}) are counted only")
 
     def failures(self, include_warnings: bool = False) -> list[tuple[RowReport, CheckResult]]:
-        """(row, check) of every failed check (and warning, if asked), in row order."""
+        """(row, check) of every failed check (and warning, if asked) of the rows in
+        ``rows``, in row order."""
         bad = {Verdict.FAIL, Verdict.WARN} if include_warnings else {Verdict.FAIL}
         return [(r, c) for r in self.rows for c in r.checks if c.verdict in bad]
 
+    def failure_lines(self, limit: int | None = MAX_FAILURE_LINES) -> list[str]:
+        """The first ``limit`` failed checks, one line each (:meth:`failures`)."""
+        return [_failure_line(r, c) for r, c in self.failures()[:limit]]
+
     def to_dict(self) -> dict:
-        return {"verdict": self.verdict.value, "counts": self.counts, "source": self.source,
-                "map": self.map_source, "assumptions": list(self.assumptions),
-                "tolerance_rule": TOLERANCE_RULE, "rows": [r.to_dict() for r in self.rows],
-                "provenance": dict(self.provenance)}
+        out = {"verdict": self.verdict.value, "counts": self.counts, "source": self.source,
+               "map": self.map_source, "assumptions": list(self.assumptions),
+               "tolerance_rule": TOLERANCE_RULE, "rows": [r.to_dict() for r in self.rows],
+               "rows_total": self.n_rows, "rows_omitted": self.omitted}
+        if self.omitted:
+            out["rows_note"] = self.listing()
+        out["failures"] = self.failure_lines()
+        out["provenance"] = dict(self.provenance)
+        return out
 
     def format_table(self) -> str:
-        """A fixed-width table, one line per check (row, check, verdict, value, reference,
-        deviation, tolerance, reference used), then the notes of the rows and a summary."""
+        """A fixed-width table, one line per check of the rows in ``rows`` (row, check,
+        verdict, value, reference, deviation, tolerance, reference used), then their notes and
+        a summary (with :meth:`listing` when rows were left out)."""
         head = ("row", "check", "verdict", "value", "reference", "deviation", "tolerance",
                 "reference used")
         cells = [head]
@@ -1173,6 +1449,7 @@ class CheckReport:
                           *lines, "", *(["notes:"] + notes if notes else []),
                           *[f"assumption: {a}" for a in self.assumptions],
                           f"rule: {TOLERANCE_RULE}",
+                          *([f"listed: {self.listing()}"] if self.omitted else []),
                           f"rows: {counts}; verdict: {self.verdict.value.upper()}"])
 
 
@@ -1190,30 +1467,32 @@ TOLERANCE_RULE = (f"tolerance = reference error + the row's uncertainty (its *_e
                   f"{WARN_FACTOR:g}x, fail beyond; a hard bound fails when violated by more "
                   f"than the row's uncertainty")
 
-#: Short labels of the columns in check names.
-_LABEL = {"V_over_U": "V/U", "dp_plus_R0": "dp+R0", "dp_plus_R": "dp+R", "ell": "ell",
-          "film_min": "h/R"}
+#: Names of the reference checks of the columns.
+_VS_REFERENCE = {"V_over_U": "V/U vs reference", "dp_plus_R0": "dp+R0 vs reference",
+                 "dp_plus_R": "dp+R vs reference", "ell": "ell vs reference",
+                 "film_min": "h/R vs reference"}
 
 
-def _reference(row: Row, quantity: str, bem: bool, solution_map) -> Reference | str:
+def _reference(row: Row, quantity: str, bem: bool, m) -> Reference | str:
     """The most accurate reference of ``quantity`` for the row (module docstring, step 2), or
-    the reasons there is none."""
-    lam, nu = row.get("lam"), row.get("nu", 1.0)
+    the reasons there is none; ``m`` the resolved map (:func:`_resolve_map`)."""
+    v, reasons = row.values, []
+    lam, nu = v["lam"], v.get("nu", 1.0)
     if row.kind == "drop":
-        tries = (lambda: drop_reference(lam, row.get("ca"), quantity, bem),
-                 lambda: small_object_reference("drop", lam, quantity, ca=row.get("ca")))
+        tries = ((drop_reference, (lam, v.get("ca"), quantity, bem)),
+                 (small_object_reference, ("drop", lam, quantity, 1.0, v.get("ca"))))
     elif row.kind == "sphere" or nu == 1.0:
-        tries = (lambda: sphere_reference(lam, quantity, bem),
-                 lambda: small_object_reference("sphere", lam, quantity))
+        tries = ((sphere_reference, (lam, quantity, bem)),
+                 (small_object_reference, ("sphere", lam, quantity)))
     else:
-        ca_b = row.get("ca_b", DEFAULT_CA_B)
-        tries = (lambda: map_reference(nu, lam, ca_b, quantity, solution_map),
-                 lambda: near_critical_reference(nu, lam, quantity),
-                 lambda: small_object_reference("vesicle", lam, quantity, nu=nu,
-                                                ca_b=row.get("ca_b")))
-    reasons = []
-    for attempt in tries:
-        ref = attempt()
+        ref = _map_ref(nu, lam, v.get("ca_b", DEFAULT_CA_B), quantity, m)
+        if isinstance(ref, Reference):         # most vesicle rows: inside the map
+            return ref
+        reasons.append(ref)
+        tries = ((near_critical_reference, (nu, lam, quantity)),
+                 (small_object_reference, ("vesicle", lam, quantity, nu, None, v.get("ca_b"))))
+    for attempt, args in tries:
+        ref = attempt(*args)
         if isinstance(ref, Reference):
             return ref
         reasons.append(ref)
@@ -1231,12 +1510,12 @@ def _row_checks(row: Row, bem: bool, solution_map) -> tuple[list, list, bool]:
         if quantity == "dp_plus_R0":
             key, value, err, factor = _dp(row)
         elif quantity in row.values:
-            key, value, err, factor = quantity, row.get(quantity), row.errors[quantity], 1.0
+            key, value, err, factor = quantity, row.values[quantity], row.errors[quantity], 1.0
         else:
             continue
         ref = _reference(row, quantity, bem, solution_map)
         if isinstance(ref, Reference):
-            checks.append(_compare(f"{_LABEL[key]} vs reference", key, value, err, ref, factor))
+            checks.append(_compare(_VS_REFERENCE[key], key, value, err, ref, factor))
         else:
             notes.append(f"{quantity}: no reference ({ref})")
     for relation in (chen_film_scaling_check, shape_volume_area_checks):
@@ -1252,6 +1531,172 @@ def _row_checks(row: Row, bem: bool, solution_map) -> tuple[list, list, bool]:
         else:
             notes.append(f"shape_class: no reference ({result})")
     return checks, notes, True
+
+
+# --------------------------------------------------------------------------- reading and checking
+
+#: Rank of a row whose check waits for the second pass (:func:`check_summary`): it needs a
+#: solver.
+_DEFERRED = 3
+
+
+def _needs_solver(kind: str, nu: float, bem: bool) -> bool:
+    """Whether a row's references come from a BEM solve (a rigid sphere, a vesicle of ν = 1,
+    a drop; :func:`sphere_reference`, :func:`drop_reference`)."""
+    return bem and (kind != "vesicle" or nu == 1.0)
+
+
+def _previous(series, lam) -> np.ndarray:
+    """For each row, the index (0-based) of the row it is checked against in its series (-1:
+    none), as :func:`trend_checks` pairs them: ``series`` the series number of each row (-1:
+    in none), ``lam`` its λ."""
+    inside = np.flatnonzero(series >= 0)
+    order = inside[np.lexsort((lam[inside], series[inside]))]   # stable: file order for ties
+    before, after = order[:-1], order[1:]
+    step = (series[after] == series[before]) & (lam[after] > lam[before])
+    previous = np.full(len(series), -1, dtype=np.int64)
+    previous[after[step]] = before[step]
+    return previous
+
+
+class _Survey:
+    """The first pass over the rows (:func:`check_summary`): each row parsed (an
+    :class:`InputError` before anything is printed or solved) and, unless it needs a solver,
+    checked; kept per row, in arrays: its rank (0 pass, 1 warn, 2 fail, :data:`_DEFERRED`), its
+    series, what its series checks need (:func:`_series_values`) and its line, about 60 bytes
+    a row. ``kept``: row number -> (row, checks, notes) of the ``keep`` checked rows of highest
+    rank before the series checks (None: all), most of which are listed in the end."""
+
+    def __init__(self, rows, bem: bool, m, keep: int | None):
+        keys, ranked, self.solid = {}, [], False
+        self.default_ca = [0, []]           # vesicle rows without ca_b: number, the first 10
+        series, self.values = array.array("i"), array.array("d")
+        self.lines, ranks = array.array("q"), array.array("b")
+        none = (math.nan,) * 5
+        n = 0
+        for n, line, cells in rows:
+            row = parse_row(cells, n, _where(n, line))
+            v, kind = row.values, row.kind
+            nu, lam = v.get("nu", 1.0), v["lam"]
+            if kind == "vesicle" and nu < 1.0 and "ca_b" not in v:
+                self.default_ca[0] += 1
+                if self.default_ca[0] <= 10:
+                    self.default_ca[1].append(n)
+            self.solid = self.solid or kind != "vesicle" or nu == 1.0
+            key = None if kind == "drop" or lam >= _lam_c(nu) else _series_key(kind, v)
+            series.append(-1 if key is None else keys.setdefault(key, len(keys)))
+            self.values.extend(none if key is None else _series_values(v, row.errors))
+            self.lines.append(line or 0)
+            if _needs_solver(kind, nu, bem):
+                ranks.append(_DEFERRED)
+                continue
+            checks, notes, _ = _row_checks(row, bem, m)
+            rank = _worst(map(_VERDICT_OF, checks)).rank
+            ranks.append(rank)
+            _offer(ranked, keep, (rank, -n), (row, checks, notes))
+        self.n = n
+        self.kept = {-key[1]: item for key, item in ranked}
+        values = np.frombuffer(self.values, dtype=float).reshape(n, 5)
+        self.previous = _previous(np.frombuffer(series, dtype=np.intc), values[:, 0])
+        self.rank = np.frombuffer(ranks, dtype=np.int8).astype(np.int64)
+        b = np.flatnonzero((self.previous >= 0) & (self.rank != _DEFERRED))
+        a = self.previous[b]
+        for (_, sign, _), k in zip(_TRENDS, (1, 3)):       # as _trend_pair, for every row
+            step = sign * (values[b, k] - values[a, k])
+            self.rank[b] = np.maximum(self.rank[b], _trend_rank(step, values[a, k + 1]
+                                                                + values[b, k + 1]))
+
+    def trend(self, n: int) -> list[CheckResult]:
+        """The series checks of row ``n`` (:func:`_trend_pair`)."""
+        a = int(self.previous[n - 1])
+        if a < 0:
+            return []
+        return _trend_pair(tuple(self.values[5 * a:5 * a + 5]),
+                           _where(a + 1, self.lines[a] or None),
+                           tuple(self.values[5 * n - 5:5 * n]))
+
+
+def _offer(ranked: list, keep: int | None, key: tuple, item) -> None:
+    """Keep ``item`` in ``ranked`` if its ``key`` is among the ``keep`` highest so far (a heap
+    of (key, item), the lowest on top; None: keep all)."""
+    if keep is None:
+        ranked.append((key, item))
+    elif len(ranked) < keep:
+        heapq.heappush(ranked, (key, item))
+    elif keep and key > ranked[0][0]:
+        heapq.heapreplace(ranked, (key, item))
+
+
+def check_summary(rows_or_path, *, bem: bool = True, solution_map=None,
+                  keep: int | None = MAX_LISTED_ROWS) -> CheckReport:
+    r"""The consistency check of ``rows_or_path`` in bounded memory: the verdict counts of
+    every row and the :class:`RowReport` of at most ``keep`` rows (None: all), the failing ones
+    first, then those with warnings, then passing ones, each in file order (listed in file
+    order).
+
+    The first pass reads, converts and checks each row as it comes (a CSV file as a stream,
+    :func:`correlations.files.open_text`; a JSON file whole, at most
+    :data:`MAX_JSON_ROWS_BYTES`) and keeps of it only its verdict and what the series checks
+    need (λ, V/U, Δp⁺R0/(ηU), their uncertainties: about 60 bytes a row), besides the reports
+    of the ``keep`` worst rows so far. A row that needs a solver (a BEM reference of a sphere or
+    a drop) waits, so that bad input anywhere raises :class:`InputError` before any solver
+    runs. Then the series checks of all rows are made together, which completes every verdict.
+    A second pass, only if needed, reads the rows again up to the last one it needs: those to
+    be listed whose report was not kept (a series check made them worse) and the rows that
+    need a solver (a second or so per (λ, Ca), cached), each checked once.
+
+    Parameters and errors as :func:`check_results`; ``keep`` >= 0 or None. A file that changes
+    between the two passes raises :class:`InputError`.
+    """
+    if keep is not None and keep < 0:
+        raise InvalidParameterError("keep", keep, "keep >= 0 or None")
+    source, rows, path = _source(rows_or_path)
+    m = _resolve_map(solution_map)
+    stat = None if path is None else os.stat(path)
+    survey = _Survey(rows(), bem, m, keep)
+    deferred = survey.rank == _DEFERRED
+    counts = np.bincount(survey.rank[~deferred], minlength=3)
+    checked = np.flatnonzero(~deferred)
+    listed = checked[np.argsort(-survey.rank[checked], kind="stable")[:keep]] + 1
+    needed = deferred.copy()
+    ranked = []                     # the reports listed: a heap of ((rank, -index), report)
+    for n in listed.tolist():
+        if n in survey.kept:
+            row, checks, notes = survey.kept[n]
+            r = RowReport(row, tuple(checks + survey.trend(n)), tuple(notes))
+            _offer(ranked, keep, (r.verdict.rank, -n), r)
+        else:
+            needed[n - 1] = True
+    survey.kept = None
+    last = int(np.flatnonzero(needed)[-1]) + 1 if needed.any() else 0
+    for n, line, cells in (rows() if last else ()):
+        if needed[n - 1]:
+            row = parse_row(cells, n, _where(n, line))
+            checks, notes, _ = _row_checks(row, bem, m)
+            r = RowReport(row, tuple(checks + survey.trend(n)), tuple(notes))
+            if deferred[n - 1]:
+                counts[r.verdict.rank] += 1
+            _offer(ranked, keep, (r.verdict.rank, -n), r)
+        if n >= last:
+            break
+    if stat is not None:
+        now = os.stat(path)
+        if (now.st_size, now.st_mtime_ns) != (stat.st_size, stat.st_mtime_ns):
+            raise InputError(source, FILE, source, "a file that stays unchanged while it is "
+                             "checked", "it changed between the two readings")
+    assumptions = []
+    count, first = survey.default_ca
+    if count:
+        shown = ", ".join(map(str, first)) + (", ..." if count > len(first) else "")
+        assumptions.append(f"{count} vesicle rows without ca_b (rows {shown}): the "
+                           f"map was read at Ca_B = {DEFAULT_CA_B:g} (Chen et al. 2020 §IV.A: "
+                           "shapes virtually independent of Ca_B >= 50); give ca_b")
+    if not bem and survey.solid:
+        assumptions.append("BEM references skipped (bem=False): spheres and drops are checked "
+                           "against the small-object laws only, where they are valid")
+    return CheckReport(tuple(sorted((r for _, r in ranked), key=lambda r: r.row.index)), source,
+                       str(m) if isinstance(m, _NoMap) else m.source, tuple(assumptions),
+                       provenance(), m, {v.value: int(counts[v.rank]) for v in Verdict})
 
 
 def check_results(rows_or_path, *, bem: bool = True, solution_map=None) -> CheckReport:
@@ -1273,13 +1718,15 @@ def check_results(rows_or_path, *, bem: bool = True, solution_map=None) -> Check
     -------
     CheckReport
         Per row its checks (:class:`CheckResult`), notes and verdict; the module docstring
-        gives the checks, tolerances and verdicts.
+        gives the checks, tolerances and verdicts. It holds every row: for a large file,
+        :func:`check_summary` keeps a bounded part.
 
     Raises
     ------
     InputError
-        For any input that cannot be read or used (naming the row and column), before any
-        check.
+        For any row or column that cannot be used (naming the row and column), before any
+        check; :class:`correlations.files.UnreadableFile` for a file that cannot be read.
+        Both are :class:`~lubrication.checks.InvalidParameterError`.
 
     Examples
     --------
@@ -1288,26 +1735,7 @@ def check_results(rows_or_path, *, bem: bool = True, solution_map=None) -> Check
     >>> rep.verdict.value, [c.name for c in rep.rows[0].checks][:3]
     ('pass', ['lam < lam_c', '1 <= V/U < 2', 'dp+ > 0'])
     """
-    raw, source = read_rows(rows_or_path)
-    rows = [parse_row(cells, n, where) for n, (where, cells) in enumerate(raw, 1)]
-    m = _resolve_map(solution_map)
-    map_source = str(m) if isinstance(m, _NoMap) else m.source
-    per_row = [_row_checks(row, bem, m) for row in rows]
-    trends = trend_checks([row for row, (_, _, fits) in zip(rows, per_row) if fits])
-    reports = tuple(RowReport(row, tuple(checks + trends.get(row.index, [])), tuple(notes))
-                    for row, (checks, notes, _) in zip(rows, per_row))
-    assumptions = []
-    default_ca = [r.index for r in rows if r.kind == "vesicle" and r.get("nu") < 1.0
-                  and "ca_b" not in r.values]
-    if default_ca:
-        listed = ", ".join(map(str, default_ca[:10])) + (", ..." if len(default_ca) > 10 else "")
-        assumptions.append(f"{len(default_ca)} vesicle rows without ca_b (rows {listed}): the "
-                           f"map was read at Ca_B = {DEFAULT_CA_B:g} (Chen et al. 2020 §IV.A: "
-                           "shapes virtually independent of Ca_B >= 50); give ca_b")
-    if not bem and any(r.kind != "vesicle" or r.get("nu") == 1.0 for r in rows):
-        assumptions.append("BEM references skipped (bem=False): spheres and drops are checked "
-                           "against the small-object laws only, where they are valid")
-    return CheckReport(reports, source, map_source, tuple(assumptions), provenance(), m)
+    return check_summary(rows_or_path, bem=bem, solution_map=solution_map, keep=None)
 
 
 def assert_consistent(rows_or_path, *, allow_warnings: bool = True, **options) -> CheckReport:
@@ -1321,11 +1749,7 @@ def assert_consistent(rows_or_path, *, allow_warnings: bool = True, **options) -
     report = check_results(rows_or_path, **options)
     bad = report.failures(include_warnings=not allow_warnings)
     if bad:
-        lines = [f"{r.row.where}{' ' + r.row.name if r.row.name else ''}: {c.name} "
-                 f"{c.verdict.value.upper()}: value {format_cell(c.value)}, reference "
-                 f"{format_cell(c.reference)} ({c.source}), deviation "
-                 f"{format_cell(c.deviation)}, tolerance {format_cell(c.tolerance)}"
-                 for r, c in bad]
+        lines = [_failure_line(r, c) for r, c in bad]
         raise AssertionError(f"{len({id(r) for r, _ in bad})} of {len(report.rows)} rows not "
                              f"consistent ({report.source}):\n" + "\n".join(lines))
     return report

@@ -2,11 +2,19 @@
 
 Follows :mod:`correlations.cli.contract`: a table (one line per check) or ``--json`` (one object
 with a ``rows`` list, each row with its ``verdict`` and its ``checks``); exit 0 when no row
-fails (warnings allowed), 1 when a row fails, 2 for unreadable input (one line naming the row
-and column), 130 on Ctrl-C. ``--report FILE.md|FILE.html`` writes a report with a figure of the
-rows over the references (Markdown: the figure beside it as ``FILE.png``; HTML: embedded); its
-path and format are checked before any work. Light at start: the check (with the solvers it
-calls) and matplotlib load only inside the command.
+fails (warnings allowed), 1 when a row fails (``"converged": false`` and one line on stderr
+with the number of failed rows and the first failure), 2 for unreadable input (one line naming
+the row and column, before any row is checked), 130 on Ctrl-C. ``--report FILE.md|FILE.html``
+writes a report with a figure of the rows over the references (Markdown: the figure beside it
+as ``FILE.png``; HTML: embedded); its path and format are checked before any work.
+
+Any number of rows is checked in bounded memory (:func:`correlations.check.check_summary`): the
+table, the JSON ``rows`` and the report list at most ``--listed-rows`` rows (default
+:data:`correlations.check.MAX_LISTED_ROWS`: failing rows first, then rows with warnings, then
+passing rows, each in file order); the verdict counts (and ``rows_total``, ``rows_omitted``)
+cover every row. A million-row table would be gigabytes of output that no one reads; the rows
+that need attention come first. Light at start: the check (with the solvers it calls) and
+matplotlib load only inside the command.
 """
 
 from __future__ import annotations
@@ -14,23 +22,37 @@ from __future__ import annotations
 import base64
 import html
 import io
+import sys
 from pathlib import Path
 
 from lubrication.io import atomic_write
-from correlations.cli.contract import add_map_option, options_named
+from correlations.cli.contract import add_map_option, check_targets, options_named, positive_int
 from correlations.plotting import plot_check
 
 __all__ = ["add_check_parser", "cmd_check", "write_report"]
 
+#: Default of ``--listed-rows`` (the same as correlations.check.MAX_LISTED_ROWS, which is not
+#: imported at start-up).
+LISTED_ROWS = 1000
+
 
 def cmd_check(args):
     from correlations.check import (  # lazy: correlations.check off the estimate's start-up
-        check_results)
+        check_summary)
+    if args.report and Path(args.report).suffix.lower() in (".md", ".markdown"):
+        check_targets("--report", files=[Path(args.report).with_suffix(".png")])
     with options_named({"map": "--map"}, args):
-        report = check_results(args.file, bem=not args.no_bem, solution_map=args.map)
-    out = {"command": "check", "converged": True, **report.to_dict()}
+        report = check_summary(args.file, bem=not args.no_bem, solution_map=args.map,
+                               keep=args.listed_rows)
+    failed = report.counts["fail"]
+    # "converged" as the contract pairs it with the exit status: false when a row failed (exit 1)
+    out = {"command": "check", "converged": not failed, **report.to_dict()}
     if args.report:
         write_report(report, args.report)
+    if failed:
+        first = report.failure_lines(1)
+        print(f"vesicle-tube check: {failed} of {report.n_rows} rows failed a check"
+              + (f"; the first: {first[0]}" if first else ""), file=sys.stderr)
     return out, report.format_table()
 
 
@@ -50,6 +72,9 @@ def _blocks(report, figure: str) -> list:
               ("p", "Rule: " + TOLERANCE_RULE)]
     if report.assumptions:
         blocks.append(("ul", [f"Assumption: {a}" for a in report.assumptions]))
+    if report.omitted:
+        blocks.append(("p", (f"Listed: {report.listing()}. The rows, the figure, the checks "
+                             "and the notes below are those of the rows listed.")))
     blocks += [("h2", "Rows"),
                ("table", ("row", "name", "kind", "verdict", "checks not passed"),
                 [(r.row.index, r.row.name, r.row.kind, r.verdict.value,
@@ -153,5 +178,10 @@ def add_check_parser(subparsers) -> None:
                    help="skip the BEM references of sphere and drop rows (about a second per "
                         "(lam, Ca)); the small-object laws remain where valid")
     add_map_option(p, "packed solution map of the vesicle references")
+    p.add_argument("--listed-rows", type=positive_int, default=LISTED_ROWS, metavar="N",
+                   help=f"list at most N rows in the table, the JSON and the report (default "
+                        f"{LISTED_ROWS}): failing rows first, then rows with warnings, then "
+                        "passing rows, each in file order; the verdict counts cover every row "
+                        "(memory: a few kB per listed row)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=cmd_check)

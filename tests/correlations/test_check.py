@@ -9,7 +9,10 @@ Every test asserts against an independent reference with its tolerance stated:
 * Chen et al. 2020 Table I (drops, lam = 0.8) against our converged BEM drops
   (tests/bem/test_drop.py CONVERGED): the verdicts are asserted and quoted in the docs;
 * input: hand conversions of physical units, and every kind of bad input raising InputError
-  (CLI: exit 2, one line) naming the row and the column.
+  (CLI: exit 2, one line) naming the row and the column;
+* large inputs: the bounded summary (check_summary) against the full check of the same rows,
+  its memory against what holding every row takes, and the files that are not tables (a FIFO,
+  an endless line, a JSON file over its limit: exit 2, one line).
 """
 
 from __future__ import annotations
@@ -17,16 +20,23 @@ from __future__ import annotations
 import importlib.util
 import json
 import math
+import os
+import shutil
+import subprocess
+import sys
+import tracemalloc
 from pathlib import Path
 
 import numpy as np
 import pytest
 from cli_helpers import strict_json
 
+from correlations import check
 from correlations.check import (DEFAULT_CA_B, MAP_UNKNOWN_SOLVER_RTOL, WARN_FACTOR, InputError,
-                                Verdict, assert_consistent, check_results, film_upper_bound,
-                                length_lower_bound, parse_row, read_rows)
+                                Verdict, assert_consistent, check_results, check_summary,
+                                film_upper_bound, length_lower_bound, parse_row, read_rows)
 from correlations.solution_map import DEFAULT_MAP, load_map, pack_map, query_map, read_points
+from lubrication.checks import InvalidParameterError
 from lubrication.geometry import critical_confinement
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -515,9 +525,11 @@ def test_bad_rows_raise_naming_the_row_and_the_column(cells, column, words):
     ("items.json", "[1]", "row 1"),
 ])
 def test_malformed_files_raise_naming_the_place(tmp_path, name, text, words):
+    """InputError for a malformed table, UnreadableFile for a file that is not one (JSON)."""
     path = tmp_path / name
     path.write_text(text)
-    with pytest.raises(InputError, match=words):
+    with pytest.raises(InputError if name.endswith(".csv") else InvalidParameterError,
+                       match=words):
         check_results(path)
 
 
@@ -551,10 +563,18 @@ def test_cli_exit_0_when_every_row_passes_and_1_when_one_fails(cli, rows_file, g
     assert code == 1, err
     data = strict_json(out)
     assert data["verdict"] == "fail" and len(data["rows"]) == 4
+    assert data["converged"] is False       # the contract: exit 1 goes with "converged": false
     assert [r["verdict"] for r in data["rows"]] == ["pass", "pass", "pass", "fail"]
     failed = [c for c in data["rows"][3]["checks"] if c["verdict"] == "fail"]
     assert {"name", "verdict", "value", "reference", "deviation", "tolerance", "source",
             "why"} <= set(failed[0])
+    assert data["failures"][0].startswith(f"row 4 {data['rows'][3]['name']}: dp+ > 0 FAIL")
+    said = [line for line in err.splitlines() if "failed" in line]
+    first = data["failures"][0]
+    assert said == [f"vesicle-tube check: 1 of 4 rows failed a check; the first: {first}"], err
+    code, out, err = cli("check", bad, "--map", path)
+    assert code == 1 and "verdict: FAIL" in out
+    assert [line for line in err.splitlines() if "failed" in line] == said
 
 
 def test_cli_bad_input_exits_2_with_one_line(cli_usage_error, rows_file, tmp_path):
@@ -583,3 +603,163 @@ def test_cli_report_with_the_figure(cli, rows_file, good, build_map, tmp_path, s
     else:
         assert "data:image/png;base64," in text and not (tmp_path / "report.png").exists()
     assert f"wrote {report}" in err
+
+
+# ----------------------------------------------------------------------------- large inputs
+
+def _sphere_rows(n: int, seed: int = 3) -> list[dict]:
+    """``n`` rigid spheres at distinct lam in [0.05, 0.5) with the small-sphere law's V/U and
+    dp+ (Chen et al. 2020 eq. small1, small2) written to 9 digits: with bem=False every check
+    is a closed form (about 25 us a row)."""
+    rng = np.random.default_rng(seed)
+    lam = rng.uniform(0.05, 0.5, n)
+    return [{"name": f"s{i}", "kind": "sphere", "lam": f"{x:.9f}",
+             "V_over_U": f"{2 - 4 / 3 * x**2:.9f}", "dp_plus_R0": f"{16 * x**6:.9e}"}
+            for i, x in enumerate(lam)]
+
+
+def _write_csv(path: Path, rows: list[dict]) -> Path:
+    head = list(rows[0])
+    path.write_text(",".join(head) + "\n" + "".join(",".join(str(r.get(k, "")) for k in head)
+                                                    + "\n" for r in rows))
+    return path
+
+
+def test_the_summary_lists_the_worst_rows_and_counts_every_row(good, build_map):
+    """check_summary against the full check of the same rows (check_results, every row kept):
+    the same verdict counts, and as its rows the ``keep`` worst of them (failing rows first,
+    then warnings, then passes, each in file order), with the same checks. The rows include a
+    series whose trend is broken (its verdict is known only after every row is read) and a
+    rigid sphere whose reference is a BEM solve (checked in the second pass)."""
+    series = sorted((dict(r) for r in good if r["nu"] == 0.9), key=lambda r: r["lam"])
+    series[2]["V_over_U"], series[3]["V_over_U"] = series[3]["V_over_U"], series[2]["V_over_U"]
+    rows = [dict(r) for r in good[:40]] + series[::-1] + [
+        dict(good[5], V_over_U=0.5), {"kind": "sphere", "lam": 0.5, "V_over_U": 1.6,
+                                      "dp_plus_R0": 0.25}]
+    full = check_results(rows, solution_map=build_map)
+    assert full.counts["fail"] >= 3 and full.counts["pass"] > 10
+    for keep in (0, 3, full.counts["fail"] + 2, len(rows)):
+        summary = check_summary(rows, solution_map=build_map, keep=keep)
+        assert summary.counts == full.counts and summary.n_rows == len(rows)
+        worst = sorted(full.rows, key=lambda r: (-r.verdict.rank, r.row.index))[:keep]
+        assert [r.row.index for r in summary.rows] == sorted(r.row.index for r in worst)
+        assert [r.checks for r in summary.rows] == [full.rows[r.row.index - 1].checks
+                                                   for r in summary.rows]
+        assert summary.omitted == len(rows) - keep and bool(summary.listing()) == bool(
+            summary.omitted)
+
+
+def test_a_bad_row_stops_the_check_before_any_solver_runs(monkeypatch):
+    """Spheres need a BEM solve each; a bad last row is reported first (InputError), and no
+    solve has started."""
+    solved = []
+    monkeypatch.setattr(check, "_sphere_solution", lambda lam: solved.append(lam))
+    rows = [{"kind": "sphere", "lam": x, "V_over_U": 1.9, "dp_plus_R0": 1e-3}
+            for x in (0.11, 0.12, 0.13)] + [{"kind": "sphere", "lam": "x", "V_over_U": 1.9,
+                                             "dp_plus_R0": 1e-3}]
+    with pytest.raises(InputError, match=r"row 4, column 'lam'"):
+        check_summary(rows)
+    assert solved == []
+
+
+def test_checking_many_rows_holds_a_bounded_part_of_them(tmp_path):
+    """10 000 rows streamed from a CSV file: the peak of the memory allocated while checking
+    (tracemalloc) stays below what the rows listed and the per-row arrays of the series checks
+    take, with room for the caches, and far below what holding every row takes (per row: the
+    report of one row, measured on 400 rows kept by check_results, about 8 kB)."""
+    n, keep = 10_000, 100
+    rows = _sphere_rows(n)
+    path = _write_csv(tmp_path / "rows.csv", rows)
+    check_results(rows[:10], bem=False)                     # imports and caches warm
+    tracemalloc.start()
+    try:
+        base = tracemalloc.get_traced_memory()[0]
+        held = check_results(rows[:400], bem=False)
+        per_row = (tracemalloc.get_traced_memory()[0] - base) / 400
+        del held
+        tracemalloc.reset_peak()
+        base = tracemalloc.get_traced_memory()[0]
+        summary = check_summary(path, bem=False, keep=keep)
+        peak = tracemalloc.get_traced_memory()[1] - base
+    finally:
+        tracemalloc.stop()
+    assert summary.n_rows == n and len(summary.rows) == keep
+    assert summary.counts == {"pass": n, "warn": 0, "fail": 0}, summary.failure_lines()
+    arrays = 120                    # bytes a row: series arrays (about 60) and their sorting
+    caches = 4 * 2**20              # the lru caches of numbers, lam_c and references
+    assert per_row > 2000, per_row
+    assert peak < keep * per_row + n * arrays + caches, (peak, per_row)
+    assert peak < 0.1 * n * per_row, (peak, per_row)
+
+
+def _exe() -> str:
+    return shutil.which("vesicle-tube") or str(Path(sys.executable).with_name("vesicle-tube"))
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this system")
+def test_a_fifo_is_refused_without_waiting_for_a_writer(tmp_path):
+    """A FIFO with no writer would block a reader forever: refused (exit 2, one line) by the
+    regular-file gate, within the subprocess timeout."""
+    fifo = tmp_path / "rows.csv"
+    os.mkfifo(fifo)
+    proc = subprocess.run([_exe(), "check", str(fifo)], capture_output=True, text=True,
+                          timeout=60, check=False)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.count("\n") == 1 and "not a regular file" in proc.stderr, proc.stderr
+
+
+def test_a_file_of_one_endless_line_is_refused_at_the_record_limit(cli_usage_error, tmp_path):
+    """A copy of /dev/zero (8 MB of NUL bytes, no line break) and a header followed by a line
+    of 8 MB of digits: refused at MAX_CSV_RECORD_CHARS without reading the rest."""
+    zeros = tmp_path / "zeros.csv"
+    zeros.write_bytes(bytes(8 * 2**20))
+    line = cli_usage_error("check", str(zeros))
+    assert f"line 1 makes a record longer than {check.MAX_CSV_RECORD_CHARS}" in line
+    digits = tmp_path / "digits.csv"
+    digits.write_text("nu,lam,V_over_U,dp_plus_R0\n" + "1" * 8 * 2**20)
+    line = cli_usage_error("check", str(digits))
+    assert f"line 2 makes a record longer than {check.MAX_CSV_RECORD_CHARS}" in line
+
+
+def test_a_json_file_over_its_limit_is_refused_pointing_to_csv(cli_usage_error, tmp_path,
+                                                               monkeypatch):
+    """A JSON file is parsed whole: over MAX_JSON_ROWS_BYTES (lowered here to 2000 bytes) it is
+    refused before it is read, naming the limit and CSV."""
+    monkeypatch.setattr(check, "MAX_JSON_ROWS_BYTES", 2000)
+    path = tmp_path / "rows.json"
+    path.write_text(json.dumps(_sphere_rows(40)))
+    assert path.stat().st_size > 2000
+    line = cli_usage_error("check", str(path))
+    assert "more than the 2000 bytes" in line and "as CSV" in line
+
+
+def test_the_cli_default_of_listed_rows_is_the_library_s():
+    """correlations.cli.check keeps its own copy (correlations.check is not imported at the
+    command line's start)."""
+    from correlations.cli.check import LISTED_ROWS
+    assert LISTED_ROWS == check.MAX_LISTED_ROWS
+
+
+def test_cli_lists_the_worst_rows_and_says_what_it_left_out(cli, rows_file, good, build_map):
+    """--listed-rows 2 of 8 rows with a failing one: the JSON and the table list the 2 worst
+    rows of the full check (check_results), the counts and rows_total cover all 8, and what was
+    left out is said."""
+    rows = [dict(r) for r in good[:8]]
+    rows[5]["dp_plus_R0"] = -1.0
+    full = check_results(rows, solution_map=build_map)
+    worst = sorted(r.row.index for r in sorted(full.rows, key=lambda r: (-r.verdict.rank,
+                                                                         r.row.index))[:2])
+    path = rows_file(rows)
+    code, out, err = cli("check", path, "--map", build_map.source, "--json", "--listed-rows",
+                         "2")
+    assert code == 1, err
+    data = strict_json(out)
+    assert [r["row"] for r in data["rows"]] == worst and 6 in worst
+    assert (data["rows_total"], data["rows_omitted"]) == (8, 6)
+    assert data["counts"] == full.counts
+    assert "2 of the 8 rows are listed" in data["rows_note"]
+    assert "the other 6 rows" in data["rows_note"]
+    code, out, err = cli("check", path, "--map", build_map.source, "--listed-rows", "2")
+    assert code == 1 and "listed: 2 of the 8 rows are listed" in out
+    assert {line.split()[0] for line in out.splitlines()[3:] if line[:1].isdigit()} == {
+        str(i) for i in worst}
