@@ -61,3 +61,10 @@ docs: $(BIN)/vesicle-tube
 
 clean:
 	rm -rf $(VENV) build *.egg-info
+
+# The wheel as users install it: built from a copy of the tree, installed into a fresh venv
+# outside the checkout (dependencies from PyPI, pinned to .venv's versions), README.md's commands
+# run there and from the source, exit codes, JSON and written files compared (tests/test_wheel.py).
+.PHONY: test-wheel
+test-wheel: $(BIN)/vesicle-tube
+	$(BIN)/python -m pytest -q -s -m slow tests/test_wheel.py
