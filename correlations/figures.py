@@ -333,7 +333,7 @@ def figure_shapes(ctx):
     n_bullet = sum(p["shape_class"] == "bullet" for p in b98)
     rows.append(Statement("shapes", "a near spherical vesicle (ν = 0.98) always exhibits a "
                           "bullet-like shape", "all bullets", f"{n_bullet} of {len(b98)} bullets",
-                          "all", _verdict(n_bullet == len(b98) and b98),
+                          "all", _verdict(n_bullet == len(b98)) if b98 else "not checked",
                           "stored BEM points at ν = 0.98, Ca_B = 50, λ/λc = 0.2–0.98"))
     lines_ok, lines = 0, 0
     for nu in sorted({p["nu"] for p in data["lines"]}):
@@ -347,7 +347,7 @@ def figure_shapes(ctx):
     rows.append(Statement("shapes", "increasing λ increases the length of the vesicle but "
                           "reduces the gap", "monotone", f"{lines_ok} of {lines} ν lines",
                           "every line (length for λ/λc ≥ 0.5, the prolate branch below)",
-                          _verdict(lines_ok == lines),
+                          _verdict(lines_ok == lines) if lines else "not checked",
                           "stored BEM points, Ca_B = 50; below λ/λc = 0.5 low-ν lines switch "
                           "from elongated prolate shapes to parachutes"))
     return fig, rows, cached
@@ -924,11 +924,12 @@ def _lubrication_tension(nu, lam) -> dict:
 
 
 def _nearest_stored(ctx, nu, lam_ratio, ca_b):
-    """The converged stored BEM point nearest (distance in ν/0.05, λ/λc/0.1, log10 Ca_B)."""
+    """The converged stored BEM point nearest (distance in ν/0.05, λ/λc/0.1, log10 Ca_B); None
+    when the build folder holds none."""
     return min((p for p in ctx.points if p["method"] == "bem" and p.get("success")
                 and p.get("shape")),
                key=lambda p: ((p["nu"] - nu) / 0.05) ** 2 + ((p["lam_ratio"] - lam_ratio) / 0.1) ** 2
-               + math.log10(p["ca_b"] / ca_b) ** 2)
+               + math.log10(p["ca_b"] / ca_b) ** 2, default=None)
 
 
 def _bem_tension(ctx, nu, lam, p):
@@ -959,11 +960,15 @@ def figure_tension(ctx):
                          lambda: _lubrication_tension(nu, lam), inputs={})
     ctx.progress("  lubrication: " + ("converged" if lub["success"] else "NOT converged"))
     p = _nearest_stored(ctx, nu, lam / float(critical_confinement(nu)), CA_B)
-    seed = {k: p[k] for k in ("nu", "lam_ratio", "ca_b")}
-    seed["shape"] = hashlib.sha256(json.dumps(p["shape"]).encode()).hexdigest()[:16]
-    bem, c2 = ctx.cached("bem_tension", {"nu": nu, "lam": lam, "ca_b": CA_B,
-                                         "max_time": ctx.bem_max_time},
-                         lambda: _bem_tension(ctx, nu, lam, p), inputs={"seed": seed})
+    if p is None:
+        bem, c2 = {"success": False, "seconds": 0.0, "seed_used": "build folder",
+                   "message": f"{ctx.build} holds no converged BEM shape to start from"}, False
+    else:
+        seed = {k: p[k] for k in ("nu", "lam_ratio", "ca_b")}
+        seed["shape"] = hashlib.sha256(json.dumps(p["shape"]).encode()).hexdigest()[:16]
+        bem, c2 = ctx.cached("bem_tension", {"nu": nu, "lam": lam, "ca_b": CA_B,
+                                             "max_time": ctx.bem_max_time},
+                             lambda: _bem_tension(ctx, nu, lam, p), inputs={"seed": seed})
     ctx.progress("  BEM: " + ("converged" if bem["success"] else "NOT converged")
                  + (" (cached)" if c2 else f" in {bem['seconds']:.0f} s"))
     fig, (ax,) = _new_figure(1, 1, (7.0, 4.4))

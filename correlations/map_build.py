@@ -76,12 +76,11 @@ from pathlib import Path
 from lubrication.checks import Deadline, InvalidParameterError, check_range
 from lubrication.geometry import critical_confinement
 from lubrication.io import provenance as run_provenance
-from lubrication.io import write_json
+from lubrication.io import temporary_target, write_json
 from lubrication.results import Status, leading_status, status_of
 
-from .files import UnreadableFile, expect, read_json
 from .solution_map import (POINT_FORMAT, POINT_GLOB, QUANTITIES, pack_map, point_filename,
-                           read_point, read_points)
+                           read_build, read_point, read_points)
 
 __all__ = ["DEFAULT_GRID", "DEFAULT_OPTIONS", "LOCK_NAME", "MAX_POINTS", "METHODS", "SOLVERS",
            "BuildInputError", "make_grid", "check_build", "max_workers", "line_tasks",
@@ -537,15 +536,9 @@ def _read_build(folder: Path):
     (:func:`make_grid`, :func:`check_build`) are reported with what to do: its points were
     solved with values no solver accepts now, so the build cannot be resumed as recorded."""
     path = folder / "build.json"
-    if not path.exists():
+    if not os.path.lexists(path):          # a dangling link is an unreadable build.json
         return None, None
-    what = "a new folder or a build folder of 'vesicle-tube map build'"
-    info = read_json(path, name="out", what=what)
-    expect(isinstance(info, dict) and isinstance(info.get("grid"), dict)
-           and isinstance(info.get("parameters", {}), dict)
-           and isinstance(info.get("parameters", {}).get("options", {}), dict)
-           and isinstance(info.get("provenance", {}), dict),
-           name="out", path=path, what=what, reason="build.json without a grid and parameters")
+    info = read_build(folder, name="out")
     g = info["grid"]
     try:
         grid = make_grid(g["nu"], g["lam_ratio"], g["ca_b"], g["methods"])
@@ -556,9 +549,6 @@ def _read_build(folder: Path):
             "accepts", f"its build.json records a value the solvers refuse, {exc.name}: "
             f"{exc}; a build with these values cannot be resumed: build into a new folder (or "
             "delete this one and build again)") from None
-    except (KeyError, TypeError, ValueError) as exc:
-        raise UnreadableFile("out", path, what, f"a malformed grid in build.json ({exc!r})") \
-            from None
     return info, grid
 
 
@@ -716,9 +706,10 @@ def _own_temporaries(folder: Path) -> list[Path]:
     """The temporaries of :func:`lubrication.io.atomic_write` (``.NAME.XXXXXXXX.tmp``) of the
     files a build writes (``build.json`` and the point files): other files in the folder, and
     temporaries of files of other names, are not the build's to remove."""
-    def own(name: str) -> bool:             # ".NAME.XXXXXXXX.tmp" -> NAME
-        target = name[1:].rsplit(".", 2)[0]
-        return target == "build.json" or fnmatch.fnmatchcase(target, POINT_GLOB)
+    def own(name: str) -> bool:
+        target = temporary_target(name)
+        return target is not None and (target == "build.json"
+                                       or fnmatch.fnmatchcase(target, POINT_GLOB))
     return [p for p in folder.glob(".*.tmp") if own(p.name) and p.is_file()]
 
 

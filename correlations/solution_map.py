@@ -140,7 +140,7 @@ from .files import check_input_file, expect, read_json
 
 __all__ = ["FORMAT", "POINT_FORMAT", "POINT_GLOB", "QUANTITIES", "TRANSFORMS", "DEFAULT_MAP",
            "CA_B_CLAMP_MAX", "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
-           "read_points", "pack_map", "load_map", "query_map"]
+           "read_points", "read_build", "pack_map", "load_map", "query_map"]
 
 #: identifiers of the packed file and of a stored point (checked on load)
 FORMAT, FORMAT_VERSION = "vesicle-tube solution map", 1
@@ -311,6 +311,22 @@ def _check_grid(grid, check) -> None:
               f"'grid.{field_}' is not a non-empty list of values, each {expected}")
         check(len({round(v, 9) for v in values}) == len(values), f"'grid.{field_}' repeats a "
               "value")
+
+
+def read_build(folder, name: str = "folder") -> dict:
+    """The ``build.json`` of a build folder, its schema checked (a grid of :func:`_check_grid`,
+    ``parameters`` with ``options`` and ``provenance`` objects); raises
+    :class:`~correlations.files.UnreadableFile` naming ``name`` otherwise."""
+    path = Path(folder) / "build.json"
+    build = read_json(path, name=name, what=_BUILD_WHAT)
+    check = _schema(name, path, _BUILD_WHAT)
+    check(isinstance(build, dict), "build.json is not a JSON object")
+    _check_grid(build.get("grid"), check)
+    for key in ("parameters", "provenance"):
+        check(isinstance(build.get(key, {}), dict), f"the field {key!r} is not an object")
+    check(isinstance(build.get("parameters", {}).get("options", {}), dict),
+          "the field 'parameters.options' is not an object")
+    return build
 
 
 def _rejection(point: dict) -> str:
@@ -957,12 +973,7 @@ def pack_map(folder, out=None) -> Path:
     its points gave).
     """
     folder = Path(folder)
-    build = read_json(folder / "build.json", name="folder", what=_BUILD_WHAT)
-    check = _schema("folder", folder / "build.json", _BUILD_WHAT)
-    check(isinstance(build, dict), "build.json is not a JSON object")
-    _check_grid(build.get("grid"), check)
-    for key in ("parameters", "provenance"):
-        check(isinstance(build.get(key, {}), dict), f"the field {key!r} is not an object")
+    build = read_build(folder)
     grid = build["grid"]
     stored = {_key(p["nu"], p["lam_ratio"], p["ca_b"]) + (p["method"],): p
               for p in read_points(folder)}

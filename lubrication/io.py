@@ -33,6 +33,7 @@ import json
 import math
 import os
 import platform
+import re
 import subprocess
 import sys
 import tempfile
@@ -40,8 +41,8 @@ from pathlib import Path
 
 import lubrication   # the package's __version__, read at call time (no import-order dependency)
 
-__all__ = ["TEMPORARY_EXTRA", "WriteError", "atomic_write", "clean_json", "forget_written_files",
-           "make_folder", "path_limits", "provenance", "save_json", "save_result", "write_json",
+__all__ = ["TEMPORARY_EXTRA", "WriteError", "atomic_write", "temporary_target", "clean_json",
+           "forget_written_files", "make_folder", "path_limits", "provenance", "save_json", "save_result", "write_json",
            "written_files"]
 
 # Every file completed by atomic_write in this process, in order: the command line names them
@@ -96,6 +97,22 @@ def path_limits(folder) -> tuple[int, int]:
 #: characters): this many bytes more than NAME, which is shortened where the file system's name
 #: limit needs it (so its path is at most this much longer than the target's).
 TEMPORARY_EXTRA = len("." + "." + "XXXXXXXX" + ".tmp")
+# mkstemp's random part: 8 characters of [a-z0-9_] (tempfile._RandomNameSequence)
+_TEMPORARY = re.compile(r"\.(.+)\.[a-z0-9_]{8}\.tmp")
+
+
+def temporary_target(name: str) -> str | None:
+    """The name of the file whose :func:`atomic_write` temporary ``name`` is
+    (``.NAME.XXXXXXXX.tmp`` -> NAME), or None when ``name`` has not that form (a user's
+    ``.notes.old.tmp``).
+
+    Examples
+    --------
+    >>> temporary_target(".build.json.k2x_9ab0.tmp"), temporary_target(".build.json.old.tmp")
+    ('build.json', None)
+    """
+    match = _TEMPORARY.fullmatch(name)
+    return match.group(1) if match else None
 
 
 def _refuse_folder(path: Path) -> None:
@@ -231,13 +248,19 @@ def save_result(directory, stem: str, data: dict, columns, profiles) -> tuple[Pa
 
 @functools.cache
 def _git_commit() -> str:
-    """The git commit of the source tree, "unknown" outside a git checkout (once a process)."""
+    """The git commit of the source tree, "unknown" outside a git checkout of this project
+    (once a process): an installed package inside a user's own repository is not that
+    repository's commit."""
+    root = Path(__file__).resolve().parents[1]
     try:
-        git = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
+        git = subprocess.run(["git", "rev-parse", "--show-toplevel", "HEAD"], cwd=root,
                              capture_output=True, text=True, timeout=5, check=False)
-        return git.stdout.strip() or "unknown"
     except (OSError, subprocess.SubprocessError):
         return "unknown"
+    lines = git.stdout.split()
+    if git.returncode or len(lines) != 2 or Path(lines[0]).resolve() != root:
+        return "unknown"
+    return lines[1]
 
 
 def provenance() -> dict:

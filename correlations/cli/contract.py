@@ -50,6 +50,7 @@ import contextlib
 import json
 import math
 import os
+import re
 import sys
 import tempfile
 import unicodedata
@@ -69,8 +70,8 @@ EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 130, 141
 __all__ = ["EXIT_OK", "EXIT_NOT_CONVERGED", "EXIT_INVALID", "EXIT_INTERRUPTED",
            "EXIT_BROKEN_PIPE", "EXIT_CHECK_FAILED", "EXIT_NOT_WRITTEN", "UsageError", "Parser",
            "format_rows", "format_value", "format_value_error", "REPORT_FORMATS",
-           "MAX_OUTPUT_NAME", "check_report_path", "check_output_dir", "check_plot_path",
-           "save_plot", "saved", "not_written_message", "non_finite_keys", "dump_json",
+           "MAX_OUTPUT_NAME", "check_report_path", "check_output_dir", "check_targets",
+           "check_plot_path", "save_plot", "saved", "not_written_message", "non_finite_keys", "dump_json",
            "finite_float", "positive_int", "add_max_time_option", "add_map_option", "one_line",
            "short_path", "options_named", "is_interrupt", "interrupted_message",
            "ASCII_SPELLINGS", "command_streams", "output_failed", "os_error_message"]
@@ -80,10 +81,21 @@ class UsageError(Exception):
     """Options given in a combination or with a value the command does not accept (exit 2)."""
 
 
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$",
+                              re.IGNORECASE)
+
+
 class Parser(argparse.ArgumentParser):
     """argparse with the contract's one-line error and exit status 2, and a help text whose
     failed write (stdout on a full disk) raises, as every output of the command line does,
     instead of being dropped."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # argparse takes "-1e5" and "-inf" for options (its pattern of a negative number has
+        # no exponent), so "--nu -1e5" would fail as "expected one argument" instead of
+        # reaching the option's check: every negative number is a value here
+        self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message):
         self.exit(EXIT_INVALID, f"{one_line(self.prog)}: error: {one_line(message)}\n")
@@ -217,6 +229,20 @@ def _looked_up(option: str, path):
         yield
     except OSError as exc:
         raise UsageError(f"{option} {short_path(path)}: {exc.strerror or exc}") from None
+
+
+def check_targets(option: str, files=(), folders=()) -> None:
+    """Check, before any work, the fixed names a command writes under an output option:
+    none of ``files`` is a folder and none of ``folders`` is a file (a :class:`UsageError`
+    naming the option), so that a result is not computed only to fail at its last write."""
+    for path in map(Path, files):
+        if path.is_dir():
+            raise UsageError(f"{option}: {short_path(path)} is a folder where this command "
+                             "writes a file; move it away or choose another output")
+    for path in map(Path, folders):
+        if path.exists() and not path.is_dir():
+            raise UsageError(f"{option}: {short_path(path)} is a file where this command "
+                             "keeps a folder; move it away or choose another output")
 
 
 def check_output_dir(option: str, path) -> Path:

@@ -17,7 +17,8 @@ import time
 from pathlib import Path
 
 from lubrication.io import atomic_write, provenance, write_json
-from correlations.cli.contract import UsageError, add_map_option, finite_float, options_named
+from correlations.cli.contract import (UsageError, add_map_option, check_targets, finite_float,
+                                      options_named, short_path)
 from correlations.figures import FIGURES, FigureContext, make_figure, render_markdown
 
 __all__ = ["add_figures_parser", "cmd_figures", "FORMATS"]
@@ -34,9 +35,15 @@ def cmd_figures(args):
     if not args.bem_max_time > 0:
         raise UsageError(f"--bem-max-time {args.bem_max_time:g}: must be > 0 [s]")
     names = list(dict.fromkeys(args.only or FIGURES))
-    with options_named({"map": "--map"}, args):
-        ctx = FigureContext(args.out, map_path=args.map, bem_max_time=args.bem_max_time,
-                            progress=_progress)
+    out = Path(args.out)
+    check_targets("--out", files=[out / "figures.json", out / "figures.md"]
+                  + [out / f"{name}.{args.format}" for name in names], folders=[out / "cache"])
+    if args.build is not None and not (Path(args.build) / "build.json").is_file():
+        raise UsageError(f"--build {short_path(args.build)}: not a build folder of "
+                         "'vesicle-tube map build' (no build.json)")
+    with options_named({"map": "--map", "build": "--build"}, args):
+        ctx = FigureContext(args.out, map_path=args.map, build=args.build,
+                            bem_max_time=args.bem_max_time, progress=_progress)
     ctx.out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     records = []
@@ -91,6 +98,9 @@ def add_figures_parser(subparsers) -> None:
     p.add_argument("--only", nargs="+", choices=list(FIGURES), metavar="NAME",
                    help="draw only these figures; names: " + ", ".join(FIGURES))
     add_map_option(p)
+    p.add_argument("--build", metavar="DIR",
+                   help="build folder whose stored BEM shapes the shape and tension figures "
+                        "use (default: the shipped correlations/data/solution_map_build)")
     p.add_argument("--bem-max-time", type=finite_float, default=900.0, metavar="SECONDS",
                    help="wall-time budget of each BEM solve (not converged beyond it) [s] "
                         "(default 900)")

@@ -21,8 +21,9 @@ from pathlib import Path
 from lubrication.checks import InvalidParameterError, check_positive, check_range
 from lubrication.geometry import critical_confinement
 from correlations.cli.contract import (EXIT_INTERRUPTED, Parser, UsageError, add_map_option,
-                                      check_output_dir, finite_float, format_rows, format_value,
-                                      is_interrupt, options_named, positive_int, short_path)
+                                      check_output_dir, check_targets, finite_float,
+                                      format_rows, format_value, is_interrupt, options_named,
+                                      positive_int, short_path)
 from correlations.files import read_json
 from correlations.solution_map import (POINT_GLOB, load_map, outside_reason, pack_map,
                                        query_map, read_points)
@@ -57,6 +58,9 @@ def _progress(state) -> None:
 def cmd_map_build(args):
     from correlations.map_build import (  # lazy: the solvers and scipy off the estimate's start-up
         DEFAULT_GRID, METHODS, build_map, make_grid)
+    out = Path(args.out)
+    check_targets("--out", files=[out / "build.json"]
+                  + ([] if args.no_pack else [out / "solution_map.json"]))
     grid_given = any(v is not None for v in (args.nu, args.lam_ratio, args.lam_ratio_bem,
                                              args.lam_ratio_lubrication, args.ca_b, args.methods))
     # a list of lam/lam_c comes from --lam-ratio-<method>, else from --lam-ratio
