@@ -3,13 +3,16 @@ solution map.
 
 Bayes' rule with a flat prior over the map's box (ν and λ/λc uniform between the map's
 nodes) and a likelihood that convolves the measurement's Gaussian with the map's own error at
-each point, a mixture of Gaussians whose widths are multiples c_j of the map's error bar ε:
+each point. That error is a mixture over classes of points m (weight W_m: a point where the
+map is good, one where it is poor, errors of V/U and ℓ large or small together), within a
+class independent for V/U and ℓ, each a mixture of Gaussians whose widths are multiples
+c_{mj} of the map's error bar ε:
 
 .. math::
 
-    p(\nu, r \mid y) \propto \prod_{k \in \{V/U,\,\ell\}} \sum_j
-        \frac{w_j}{s_{jk}} \exp\!\left(-\frac{(f_k(\nu, r) - y_k)^2}{2 s_{jk}^2}\right),
-    \qquad s_{jk}^2 = \sigma_k^2 + c_j^2\,\epsilon_k(\nu, r)^2,
+    p(\nu, r \mid y) \propto \sum_m W_m \prod_{k \in \{V/U,\,\ell\}} \sum_j
+        \frac{w_{mj}}{s_{mjk}} \exp\!\left(-\frac{(f_k(\nu, r) - y_k)^2}{2 s_{mjk}^2}
+        \right), \qquad s_{mjk}^2 = \sigma_k^2 + c_{mj}^2\,\epsilon_k(\nu, r)^2,
 
 with f the map's V/U and ℓ = L/R at Ca_B = ``ca_of(λ)``. A local
 least-squares fit sees only the neighbourhood of one minimum; where V/U and ℓ change together
@@ -105,7 +108,7 @@ def shortest_interval(values, level: float) -> tuple:
     return float(v[i]), float(v[i + k])
 
 
-def posterior(model, target, sigma, box, *, error_model=((1.0, 1.0),),
+def posterior(model, target, sigma, box, *, error_model=((1.0, ((1.0, 1.0),)),),
               max_points: int = 20000, draws: int = 20000, seed: int = 0) -> Posterior:
     """Integrate the posterior of the module docstring over ``box``.
 
@@ -115,9 +118,10 @@ def posterior(model, target, sigma, box, *, error_model=((1.0, 1.0),),
         ``model(nu, lam_ratio) -> ((V/U, ε_V), (ℓ, ε_ℓ))`` or None where the map has no value.
     target, sigma : pair of float
         Measured (V/U, ℓ) and their 1-σ errors.
-    error_model : tuple of (weight, scale)
-        The distribution of the model's error: a mixture of Gaussians, each with standard
-        deviation ``scale`` × ε and the given weight (default: ε is one standard deviation).
+    error_model : tuple of (class weight, tuple of (weight, scale))
+        The distribution of the model's error (module docstring): classes of points, each
+        with its weight and its mixture of Gaussians of standard deviation ``scale`` × ε
+        (default: one class, ε is one standard deviation).
     box : tuple
         (ν_min, ν_max, r_min, r_max) of λ/λc = r.
     max_points, draws, seed : int
@@ -127,8 +131,8 @@ def posterior(model, target, sigma, box, *, error_model=((1.0, 1.0),),
     x_lo, x_hi = math.sqrt(1.0 - r_hi), math.sqrt(1.0 - r_lo)
     y = np.asarray(target, float)
     sig = np.asarray(sigma, float)
-    widest = max(scale for _, scale in error_model)
-    narrowest = min(scale for _, scale in error_model)
+    scales = [scale for _, parts in error_model for _, scale in parts]
+    widest, narrowest = max(scales), min(scales)
     cache: dict = {}
 
     def point(nu, x):
@@ -250,15 +254,17 @@ def mixture(parts: dict, prior: dict, *, seed: int = 0) -> Posterior:
 
 def _likelihood(value, y, sig, error_model) -> float:
     """The likelihood of the data y at a map point ``value`` ((f, ε) per output; 0 if None):
-    per output the measurement's Gaussian convolved with the error model's mixture."""
+    the measurement's Gaussian convolved with the error model (module docstring)."""
     if value is None:
         return 0.0
-    out = 1.0
-    for k in range(2):
-        r2 = (value[k][0] - y[k])**2
-        out *= sum(w * math.exp(-0.5 * r2 / s2) / math.sqrt(s2) for w, s2 in
-                   ((w, sig[k]**2 + (scale * value[k][1])**2) for w, scale in error_model))
-    return out
+    r2 = [(value[k][0] - y[k])**2 for k in range(2)]
+    total = 0.0
+    for weight, parts in error_model:
+        for k in range(2):
+            weight *= sum(w * math.exp(-0.5 * r2[k] / s2) / math.sqrt(s2) for w, s2 in
+                          ((w, sig[k]**2 + (scale * value[k][1])**2) for w, scale in parts))
+        total += weight
+    return total
 
 
 def _draw(cells, like, weights, n, rng):
