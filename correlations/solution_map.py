@@ -19,7 +19,9 @@ Three layers, in the order of the data's life:
    errors of every node, measured at pack time.
 3. **Query** (:func:`query_map`): every quantity at (ν, λ/λc, Ca_B) with its value, an
    interpolation-error estimate, the solver's own error, the BEM–lubrication model error where
-   lubrication points are used, and the methods of the neighbouring points.
+   lubrication points are used, and the methods of the neighbouring points. Which nodes enter
+   with which weights (the stencil) is found once per query for all quantities
+   (:class:`SolutionMap`).
 
 Which method a node uses (the rule)
 -----------------------------------
@@ -124,9 +126,11 @@ largest Ca_B of the map (e.g. 50 and 500), added to the error bar. Beyond 1e4 th
 
 from __future__ import annotations
 
+import bisect
 import functools
 import json
 import math
+import operator
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -413,6 +417,20 @@ def _inverse(q: str, y: float, ratio: float, log: bool) -> float:
     return (math.exp(y) if log else y) / _scale(q, ratio) + TRANSFORMS[q]["offset"]
 
 
+def _locate(coords, x) -> tuple[int, range]:
+    """Where ``x`` lies among the ascending ``coords``: ``pos`` with coords[:pos] < x <=
+    coords[pos:], and the positions of the nodes within the on-node tolerance of x (next to pos
+    and consecutive, since |coord − x| grows away from x; empty off the nodes)."""
+    pos = bisect.bisect_left(coords, x)
+    tol = _ON_NODE * max(1.0, abs(x))
+    lo = hi = pos
+    while lo > 0 and abs(coords[lo - 1] - x) <= tol:
+        lo -= 1
+    while hi < len(coords) and abs(coords[hi] - x) <= tol:
+        hi += 1
+    return pos, range(lo, hi)
+
+
 def _lagrange(xs, x) -> list[float]:
     """Lagrange weights of the nodes ``xs`` at ``x`` (exactly 1 and 0s on a node)."""
     w = []
@@ -441,8 +459,139 @@ def _add(a, b):
     return None if a is None or b is None else a + b
 
 
+class _Leaf:
+    """A grid node where the map has a point (the rule of :meth:`SolutionMap.node`): its index
+    in the node tables of the map, its grid coordinates, the key of its (ν, Ca_B) line, its
+    row, and (as a :class:`_Stencil` has them) the rows used and their kinds (method, shape
+    class)."""
+    __slots__ = ("node", "row", "nu", "ratio", "ca", "line", "rows", "kinds")
+
+    def __init__(self, node: int, row: int, nu: float, ratio: float, ca: float, line: tuple,
+                 kind: tuple):
+        self.node, self.row, self.nu, self.ratio, self.ca = node, row, nu, ratio, ca
+        self.line, self.rows, self.kinds = line, frozenset((row,)), frozenset((kind,))
+
+
+class _Stencil:
+    """An interpolation along one axis without its values (the same for every quantity): the
+    Lagrange weights of the nodes used, what each node gives (an inner :class:`_Stencil` or a
+    :class:`_Leaf`), the rows whose leave-one-out errors on this axis enter its interpolation
+    error (None: no error bar is formed, as in a LOO extrapolation), and every row used with
+    their kinds. ``leaf_nodes``: the node indices of the parts when all are leaves (their
+    values are then looked up in one go), else None."""
+    __slots__ = ("axis", "weights", "abs_weights", "parts", "corners", "rows", "kinds",
+                 "leaf_nodes")
+    node = None                        # a leaf's is its index: the sums tell them apart by it
+
+    def __init__(self, axis: str, weights: list, parts: list, rows: frozenset,
+                 corners: tuple | None):
+        self.axis, self.weights, self.parts, self.rows, self.corners = (axis, weights, parts,
+                                                                        rows, corners)
+        self.abs_weights = list(map(abs, weights))
+        self.kinds = frozenset().union(*[p.kinds for p in parts])
+        nodes = [p.node for p in parts]
+        self.leaf_nodes = None if None in nodes else nodes
+
+    def leaves(self):
+        """The leaves, in the order their values are summed."""
+        for p in self.parts:
+            yield from ((p,) if isinstance(p, _Leaf) else p.leaves())
+
+
+@dataclass
+class _Table:
+    """Quantity ``q`` at the grid nodes in its interpolated variable (in its logarithm if
+    ``log``), filled one (ν, Ca_B) line at a time as queries reach them (a query uses a few of
+    the map's lines). By node index: ``y`` the value scaled with the node's own δ, ``solver``
+    and ``model`` its errors in y (None where unknown, at a hole and on lines not filled);
+    ``failed`` {node: reason} where the node has a point but no y (missing, or not positive
+    where ``log``); ``notes`` {node: notes} where there are any; ``lines`` the lines filled;
+    ``has_solver`` whether a node of these lines has a solver error."""
+    q: str
+    log: bool
+    y: list
+    solver: list
+    model: list
+    failed: dict = field(default_factory=dict)
+    notes: dict = field(default_factory=dict)
+    lines: set = field(default_factory=set)
+    has_solver: bool = False
+
+
+_mul = operator.mul          # (a name of this module: looked up faster in the hot path)
+
+
+def _accumulate(weights, errors) -> float | None:
+    """Σ w_i e_i added term by term from 0.0; None if an e_i is None (unknown); 0.0 without
+    adding when every e_i is 0 (the model error of BEM nodes)."""
+    if None in errors:
+        return None
+    if not any(errors):
+        return 0.0
+    return functools.reduce(operator.add, map(_mul, weights, errors), 0.0)
+
+
+# The sums along a stencil (a _Stencil, or a _Leaf when the query sits on a node), one function
+# per kind of sum, each as the interpolation defines it, term by term in the nodes' order. They
+# are the hot path of a query (eight quantities a query, about a dozen stencil nodes each), so
+# they sum with ``map`` (loops in C) and stop at the first unknown part.
+
+def _sum_values(st, y) -> float:
+    """y = Σ w_i y_i along each axis of stencil ``st``, from the nodes' ``y`` (by node)."""
+    if st.node is not None:
+        return y[st.node]
+    if st.leaf_nodes is not None:
+        return sum(map(_mul, st.weights, map(y.__getitem__, st.leaf_nodes)))
+    return sum(map(_mul, st.weights, [_sum_values(p, y) for p in st.parts]))
+
+
+def _sum_interpolation(st, loo) -> float | None:
+    """Interpolation error of stencil ``st``: along each axis Σ |w_i| e_i (0 at a node) plus
+    the largest LOO error ``loo[axis][row]`` of its corner rows over :data:`LOO_RATIO`; None
+    where one of those LOO errors is unknown or no error bar is formed (LOO)."""
+    if st.node is not None:
+        return 0.0
+    if st.corners is None:
+        return None
+    errors = list(map(loo[st.axis].__getitem__, st.corners))
+    if None in errors:
+        return None
+    if st.leaf_nodes is not None:
+        inner = 0.0                    # Σ |w_i| 0 over the nodes, without adding
+    else:
+        parts = [_sum_interpolation(p, loo) for p in st.parts]
+        if None in parts:
+            return None
+        inner = sum(map(_mul, st.abs_weights, parts))
+    return inner + max(errors) / LOO_RATIO
+
+
+def _sum_errors(st, e) -> float | None:
+    """Solver or model error of stencil ``st`` from the nodes' ``e`` (by node): along each
+    axis Σ |w_i| e_i added term by term from 0 (:func:`_accumulate`); None if a node's is."""
+    if st.node is not None:
+        return e[st.node]
+    if st.leaf_nodes is not None:
+        return _accumulate(st.abs_weights, list(map(e.__getitem__, st.leaf_nodes)))
+    parts = []
+    for p in st.parts:
+        parts.append(_sum_errors(p, e))
+        if parts[-1] is None:
+            return None
+    return _accumulate(st.abs_weights, parts)
+
+
 class SolutionMap:
-    """A packed solution map in memory, indexed for queries (see :func:`load_map`)."""
+    """A packed solution map in memory, indexed for queries (see :func:`load_map`).
+
+    A query is answered in two steps. :meth:`_stencil` finds, once for all quantities, which
+    nodes are interpolated with which weights (the rule, the third node of each axis, the holes
+    and the corners of the grid cell): that depends on which nodes exist and on their method
+    and shape class, not on the quantity. :meth:`_evaluate` then does the arithmetic for each
+    quantity from per-map tables of the nodes' values (:meth:`_table`) and LOO errors
+    (:meth:`_loo_table`), in the order the interpolation defines. A quantity that has no
+    interpolated value at some node (a value that is not positive where its logarithm is
+    interpolated) gets a stencil of its own when the shared one looked at such a node."""
 
     def __init__(self, data: dict, source: str = ""):
         self.source = source
@@ -469,7 +618,6 @@ class SolutionMap:
         self._hole = {_key(h["nu"], h["lam_ratio"], h["ca_b"]) + (h["method"],): h["reason"]
                       for h in self.holes}
         self._overlap = {}
-        self._query = None       # the query being answered (quantity), None while packing
         self._superseded = {}    # memo of superseded()
         self._bem_top = {}       # (nu, Ca_B) -> largest lam_ratio with a converged BEM point
         for m, nu, r, ca in zip(self.columns["method"], self.columns["nu"],
@@ -477,6 +625,36 @@ class SolutionMap:
             if m == "bem":
                 k = _key(nu, ca)
                 self._bem_top[k] = max(self._bem_top.get(k, 0.0), float(r))
+        # Tables of the grid, made once so that a query only looks things up. Node index
+        # (i_nu * len(xs) + k) * len(cas) + i_ca (:meth:`_node`): a _Leaf where the map has a
+        # point, else the reason of the hole; per (nu, Ca_B) line the nodes not superseded
+        # (ascending in x) and their x.
+        kind = list(zip(self.columns["method"], self.columns["shape_class"]))
+        lines = {(nu, ca): _key(nu, ca) for nu in self.nus for ca in self.cas}
+        self._leaves = []
+        for nu in self.nus:
+            for ratio in self._ratio_of:
+                for ca in self.cas:
+                    row, reason = self.node(nu, ratio, ca)
+                    self._leaves.append(reason if row is None else _Leaf(
+                        len(self._leaves), row, nu, ratio, ca, lines[nu, ca], kind[row]))
+        ks = [[[k for k, r in enumerate(self._ratio_of) if not self.superseded(nu, r, ca)]
+               for ca in self.cas] for nu in self.nus]
+        self._line = [[[self._node(i_nu, k, i_ca) for k in ks[i_nu][i_ca]]
+                       for i_ca in range(len(self.cas))] for i_nu in range(len(self.nus))]
+        self._line_xs = [[[self.xs[k] for k in line] for line in by_ca] for by_ca in ks]
+        self._axis_nodes = {"nu": list(range(len(self.nus))), "ca": list(range(len(self.cas)))}
+        # per line its lam_ratio nodes ascending (for the corners), and the rows of each line by
+        # their nu and Ca_B as the columns hold them
+        self._line_ratios = [[sorted(self._ratio_of[k] for k in line) for line in by_ca]
+                             for by_ca in ks]
+        self._line_rows = {}
+        for row, key in enumerate(zip(self.columns["nu"], self.columns["ca_b"])):
+            self._line_rows.setdefault(key, []).append(row)
+        # per row: whether its node is inside each axis (not at an end)
+        self._interior = {axis: self._interior_rows(axis) for axis in _AXES}
+        self._tables = {}        # (q, log) -> _table(q, log)
+        self._loos = {}          # q -> _loo_table(q)
 
     # ---------------------------------------------------------------- nodes and the rule
     def node(self, nu: float, lam_ratio: float, ca_b: float) -> tuple[int | None, str]:
@@ -508,13 +686,14 @@ class SolutionMap:
         v = self.columns[q][row]
         return None if v is None else float(v)
 
-    def _model_error(self, row: int, q: str, log: bool):
-        """Model error (in y) of a lubrication row: |y_lub − y_bem| at the largest lam_ratio of
-        its line where both converged; 0 for BEM; None when unknown."""
+    def _model_error(self, row: int, q: str, log: bool, line: tuple):
+        """Model error (in y) of a lubrication row on the (ν, Ca_B) line of key ``line``
+        (:func:`_key`): |y_lub − y_bem| at the largest lam_ratio of the line where both
+        converged; 0 for BEM; None when unknown."""
         if self.columns["method"][row] != "lubrication":
             return 0.0
         nu, ca = self.columns["nu"][row], self.columns["ca_b"][row]
-        k = (_key(nu, ca), q, log)
+        k = (line, q, log)
         if k not in self._overlap:
             self._overlap[k] = None
             for r in sorted(self.ratios, reverse=True):
@@ -529,7 +708,8 @@ class SolutionMap:
         return self._overlap[k]
 
     def _solver_error(self, row: int, q: str, log: bool, ratio: float):
-        err = self.columns.get(f"err_{q}", [None] * self.n)[row]
+        column = self.columns.get(f"err_{q}")
+        err = None if column is None else column[row]
         v = self.value(row, q)
         if err is None or v is None:
             return None
@@ -540,191 +720,285 @@ class SolutionMap:
             return err / base if base > 0 else None
         return err * _scale(q, ratio)
 
-    def _kind(self, row: int) -> tuple:
-        """What a stencil's rows must share: the method and the shape class."""
-        return self.columns["method"][row], self.columns["shape_class"][row]
-
     def _bracket(self, coords, x) -> set:
-        """The node coordinates around x (the node itself when x is on one)."""
-        on = [v for v in coords if abs(v - x) <= _ON_NODE * max(1.0, abs(x))]
+        """The node coordinates (ascending) around x (the node itself when x is on one)."""
+        pos, on = _locate(coords, x)
         if on:
-            return set(on)
-        below, above = [v for v in coords if v < x], [v for v in coords if v > x]
-        return set(below[-1:] + above[:1])
+            return {coords[j] for j in on}
+        return set(coords[max(pos - 1, 0):pos + 1])
 
-    def _corner(self, row: int) -> bool:
-        """True if the row is a corner of the grid cell around the query being answered
-        (``self._query`` = (the ν and Ca_B nodes around it, its λ/λc, the λ/λc nodes around it
-        per line, filled as needed), set by :meth:`quantity`): its ν, its Ca_B and, on its own
-        line, its λ/λc bracket the query's."""
-        nu, ca, r = (self.columns[k][row] for k in ("nu", "ca_b", "lam_ratio"))
-        nus, cas, qr, lines = self._query
-        if nu not in nus or ca not in cas:
-            return False
-        if (nu, ca) not in lines:
-            lines[nu, ca] = self._bracket([v for v in self.ratios
-                                           if not self.superseded(nu, v, ca)], qr)
-        return r in lines[nu, ca]
+    def _corners(self, nu: float, ca_b: float, lam_ratio: float) -> set:
+        """The rows at the corners of the grid cell around a query (for its interpolation
+        error): their ν and Ca_B are the nodes that bracket the query's, and their λ/λc, on
+        their line, brackets the query's among the nodes not superseded."""
+        corners = set()
+        for nu_ in self._bracket(self.nus, nu):
+            for ca in self._bracket(self.cas, ca_b):
+                rows = self._line_rows.get((nu_, ca), ())
+                if rows:
+                    ratios = self._bracket(
+                        self._line_ratios[self.nus.index(nu_)][self.cas.index(ca)], lam_ratio)
+                    corners.update(r for r in rows if self.columns["lam_ratio"][r] in ratios)
+        return corners
 
-    def _interior(self, row: int, axis: str) -> bool:
-        """True if the row's node is not at an end of the axis (its LOO is an interpolation)."""
-        name, ends = {"lam": ("lam_ratio", (self._ratio_of[0], self._ratio_of[-1])),
-                      "nu": ("nu", (self.nus[0], self.nus[-1])),
-                      "ca": ("ca_b", (self.cas[0], self.cas[-1]))}[axis]
-        v = self.columns[name][row]
-        return all(abs(v - e) > _ON_NODE * max(1.0, abs(e)) for e in ends)
+    def _interior_rows(self, axis: str) -> list:
+        """Per row: True if its node is not at an end of the axis (its LOO is an
+        interpolation)."""
+        name, (lo, hi) = {"lam": ("lam_ratio", (self._ratio_of[0], self._ratio_of[-1])),
+                          "nu": ("nu", (self.nus[0], self.nus[-1])),
+                          "ca": ("ca_b", (self.cas[0], self.cas[-1]))}[axis]
+        tol_lo, tol_hi = (_ON_NODE * max(1.0, abs(e)) for e in (lo, hi))
+        return [abs(v - lo) > tol_lo and abs(v - hi) > tol_hi for v in self.columns[name]]
 
-    def _loo(self, row: int, q: str, axis: str):
-        col = self.columns.get(f"loo_{axis}_{q}")
-        return None if col is None or col[row] is None else float(col[row])
+    # ---------------------------------------------------------------- the values of the nodes
+    def _table(self, q: str, log: bool, lines=frozenset()) -> _Table:
+        """The :class:`_Table` of ``q`` (made on first use), filled for ``lines`` (line
+        indices i_nu * len(cas) + i_ca)."""
+        table = self._tables.get((q, log))
+        if table is None:
+            n = len(self._leaves)
+            table = self._tables[q, log] = _Table(q, log, [None] * n, [None] * n, [None] * n)
+        if not lines <= table.lines:
+            for line in lines - table.lines:
+                self._fill(table, line)
+        return table
 
-    # ---------------------------------------------------------------- one axis
-    def _axis(self, q, axis, coords, x, inner, exclude=None, extrapolate=False, skip=None):
-        """Interpolate along one axis: ``coords`` the node coordinates (ascending), ``inner(i)``
-        the partial result at node i (or a reason string); nodes with ``skip(i)`` true do not
-        exist on this line. Returns a _Part or a reason."""
-        idx = [i for i in range(len(coords)) if i != exclude and not (skip and skip(i))]
-        for i in idx:
-            if abs(coords[i] - x) <= _ON_NODE * max(1.0, abs(x)):
-                return inner(i)
-        below = [i for i in idx if coords[i] < x]
-        above = [i for i in idx if coords[i] > x]
+    def _fill(self, table: _Table, line: int) -> None:
+        """Fill ``table`` on one (ν, Ca_B) line (index i_nu * len(cas) + i_ca)."""
+        q, log = table.q, table.log
+        i_nu, i_ca = divmod(line, len(self.cas))
+        for k in range(len(self.xs)):
+            leaf = self._leaves[self._node(i_nu, k, i_ca)]
+            if isinstance(leaf, str):
+                continue
+            v = self.value(leaf.row, q)
+            y = _transform(q, v, leaf.ratio, log)
+            if y is None:
+                table.failed[leaf.node] = (f"{q} missing at nu={leaf.nu:.6g}, lam/lam_c="
+                                           f"{leaf.ratio:.6g}, Ca_B={leaf.ca:.6g}" if v is None
+                                           else "not positive")
+                continue
+            model = self._model_error(leaf.row, q, log, leaf.line)
+            solver = self._solver_error(leaf.row, q, log, leaf.ratio)
+            table.y[leaf.node], table.solver[leaf.node], table.model[leaf.node] = y, solver, model
+            table.has_solver = table.has_solver or solver is not None
+            if model is None:
+                table.notes[leaf.node] = (
+                    f"lubrication at nu={leaf.nu:.6g}, Ca_B={leaf.ca:.6g} is not checked "
+                    "against BEM (no common point on this line): model error unknown",)
+        table.lines.add(line)
+
+    def _loo_table(self, q: str) -> dict:
+        """{axis: the LOO error of ``q`` along it per row (None where there is none)}."""
+        if q not in self._loos:
+            self._loos[q] = {axis: [None if v is None else float(v) for v in
+                                    self.columns.get(f"loo_{axis}_{q}", [None] * self.n)]
+                             for axis in _AXES}
+        return self._loos[q]
+
+    # ---------------------------------------------------------------- the stencil
+    def _along(self, axis, nodes, coords, x, inner, extrapolate, corners):
+        """The stencil along one axis: ``nodes`` the indices of the nodes that exist on this
+        line (a node left out for LOO excluded: then ``extrapolate``), ``coords`` their
+        coordinates (ascending), ``inner(i)`` the stencil at node i (or the reason there is
+        none), ``corners`` the rows at the corners of the query's grid cell (None: no
+        interpolation error). Returns a :class:`_Stencil`, the inner stencil of the node the
+        query sits on, or a reason."""
+        n = len(nodes)
+        pos, on = _locate(coords, x)
+        if on:                         # on a node (the lowest, should two be that close)
+            return inner(nodes[on[0]])
         if not extrapolate:
-            if not below or not above:
+            if pos == 0 or pos == n:
                 return "outside"
-            parts = {}
-            for i in (below[-1], above[0]):
-                parts[i] = inner(i)
-                if isinstance(parts[i], str):
-                    return parts[i]
-            extra = ([below[-2]] if len(below) > 1 else []) + ([above[1]] if len(above) > 1
-                                                                 else [])
+            below = inner(nodes[pos - 1])
+            if isinstance(below, str):
+                return below
+            above = inner(nodes[pos])
+            if isinstance(above, str):
+                return above
+            order, ps = [pos - 1, pos], [below, above]     # positions on the line, stencils
             # the third node: the nearest usable one whose rows share the method and shape
             # class of the bracketing pair's; without one the interpolation is linear (a
             # quadratic through a branch change or a method change is worse than a line)
-            kinds = {self._kind(r) for i in parts for r in parts[i].rows}
-            for i in sorted(extra, key=lambda i: abs(coords[i] - x)):
-                p = inner(i)
-                if not isinstance(p, str) and {self._kind(r) for r in p.rows} <= kinds:
-                    parts[i] = p
+            kinds = below.kinds | above.kinds
+            extra = [j for j in (pos - 2, pos + 1) if 0 <= j < n]
+            if len(extra) == 2 and abs(coords[pos + 1] - x) < abs(coords[pos - 2] - x):
+                extra.reverse()        # nearest first (the lower one on a tie)
+            for j in extra:
+                p = inner(nodes[j])
+                if not isinstance(p, str) and p.kinds <= kinds:
+                    at = 0 if j < pos else 2
+                    order.insert(at, j)
+                    ps.insert(at, p)
                     break
         else:
             parts = {}
-            for i in sorted(idx, key=lambda i: abs(coords[i] - x)):
-                p = inner(i)
+            for j in sorted(range(n), key=lambda j: abs(coords[j] - x)):
+                p = inner(nodes[j])
                 if not isinstance(p, str):
-                    parts[i] = p
+                    parts[j] = p
                 if len(parts) == 3:
                     break
             if not parts:
                 return "no neighbour"
-        nodes = sorted(parts)
-        w = _lagrange([coords[i] for i in nodes], x)
-        ps = [parts[i] for i in nodes]
-        rows = frozenset().union(*(p.rows for p in ps))
-        interp = None
-        if not extrapolate and self._query is not None:
+            order = sorted(parts)
+            ps = [parts[j] for j in order]
+        rows = frozenset().union(*[p.rows for p in ps])
+        use = None
+        if not extrapolate and corners is not None:
             # interpolation error: the largest leave-one-out error along this axis of the
             # rows at the corners of the query's grid cell, interior nodes of the axis first
             # (module docstring, error bar)
-            corners = [r for r in rows if self._corner(r)]
-            use = [r for r in corners if self._interior(r, axis)] or corners or rows
-            loo = [self._loo(r, q, axis) for r in use]
-            if all(p.interp is not None for p in ps) and all(e is not None for e in loo):
-                interp = sum(abs(wi) * p.interp for wi, p in zip(w, ps)) + max(loo) / LOO_RATIO
-        solver = model = 0.0
-        for wi, p in zip(w, ps):
-            solver = _add(solver, None if p.solver is None else abs(wi) * p.solver)
-            model = _add(model, None if p.model is None else abs(wi) * p.model)
-        notes = tuple(dict.fromkeys(n for p in ps for n in p.notes))
-        return _Part(sum(wi * p.y for wi, p in zip(w, ps)), interp, solver, model, rows, notes)
+            at = rows & corners
+            interior = self._interior[axis]
+            use = tuple([r for r in at if interior[r]] or at or rows)
+        return _Stencil(axis, _lagrange([coords[j] for j in order], x), ps, rows, use)
 
-    # ---------------------------------------------------------------- the three axes
-    def _leaf(self, q, log, nu, ratio, ca):
-        """The node's value in the interpolated variable: scaled with the node's own δ."""
-        row, reason = self.node(nu, ratio, ca)
-        if row is None:
-            return reason
-        y = _transform(q, self.value(row, q), ratio, log)
-        if y is None:
-            return (f"{q} missing at nu={nu:.6g}, lam/lam_c={ratio:.6g}, Ca_B={ca:.6g}"
-                    if self.value(row, q) is None else "not positive")
-        model = self._model_error(row, q, log)
-        notes = () if model is not None else (
-            f"lubrication at nu={nu:.6g}, Ca_B={ca:.6g} is not checked against BEM (no common "
-            "point on this line): model error unknown",)
-        return _Part(y, 0.0, self._solver_error(row, q, log, ratio), model,
-                     frozenset([row]), notes)
+    def _stencil(self, nu, x, c, corners=None, exclude=None, table=None) -> tuple:
+        """The stencil at (nu, x = δ^½, c = log Ca_B), tensor-product fashion (λ first, then
+        Ca_B, then ν), or the reason there is none; the node indices it looked at; the indices
+        of the (ν, Ca_B) lines it reached. ``corners``: of :meth:`_corners` (None: no
+        interpolation error); ``exclude`` = (axis, node index) leaves that node out and
+        extrapolates along that axis (LOO); ``table``: a :class:`_Table` whose failed nodes
+        count as holes (filled on the lines reached)."""
+        failed = {} if table is None else table.failed
+        leaves, looked, reached = self._leaves, [], []
+        left_out = dict([exclude]) if exclude else {}
 
-    def _interpolate(self, q, log, nu, x, c, exclude=None):
-        """Value of quantity q (transformed) at (nu, x = delta^1/2, c = log Ca_B); ``exclude``
-        = (axis, node index) leaves that node out and extrapolates along that axis (LOO)."""
-        ex = dict([exclude]) if exclude else {}
+        def line(axis, nodes, coords, node):
+            """The nodes of a line and their coordinates, without ``node`` if left out."""
+            if axis not in left_out or node not in nodes:
+                return nodes, coords
+            j = nodes.index(node)
+            return nodes[:j] + nodes[j + 1:], coords[:j] + coords[j + 1:]
+
+        def leaf(node):
+            looked.append(node)
+            return failed.get(node, leaves[node])
 
         def along_lam(i_nu, i_ca):
-            nu_, ca_ = self.nus[i_nu], self.cas[i_ca]
-            return self._axis(q, "lam", self.xs, x,
-                              lambda k: self._leaf(q, log, nu_, self._ratio_of[k], ca_),
-                              ex.get("lam"), "lam" in ex,
-                              lambda k: self.superseded(nu_, self._ratio_of[k], ca_))
+            reached.append(i_nu * len(self.cas) + i_ca)
+            if table is not None and reached[-1] not in table.lines:
+                self._fill(table, reached[-1])
+            nodes, coords = line("lam", self._line[i_nu][i_ca], self._line_xs[i_nu][i_ca],
+                                 self._node(i_nu, left_out.get("lam"), i_ca))
+            return self._along("lam", nodes, coords, x, leaf, "lam" in left_out, corners)
 
         def along_ca(i_nu):
-            return self._axis(q, "ca", self._cs, c, lambda j: along_lam(i_nu, j), ex.get("ca"),
-                              "ca" in ex)
+            nodes, coords = line("ca", self._axis_nodes["ca"], self._cs, left_out.get("ca"))
+            return self._along("ca", nodes, coords, c, lambda j: along_lam(i_nu, j),
+                               "ca" in left_out, corners)
 
-        return self._axis(q, "nu", self.nus, nu, along_ca, ex.get("nu"), "nu" in ex)
+        nodes, coords = line("nu", self._axis_nodes["nu"], self.nus, left_out.get("nu"))
+        st = self._along("nu", nodes, coords, nu, along_ca, "nu" in left_out, corners)
+        return st, frozenset(looked), frozenset(reached)
 
-    def _log_usable(self, q) -> bool:
-        return TRANSFORMS[q]["log"]
+    def _node(self, i_nu: int, k: int | None, i_ca: int) -> int | None:
+        """Index of the grid node (ν, λ/λc, Ca_B) = (nus[i_nu], _ratio_of[k], cas[i_ca]) in
+        the node tables (None for k None)."""
+        return None if k is None else (i_nu * len(self.xs) + k) * len(self.cas) + i_ca
 
-    def quantity(self, q: str, nu: float, lam_ratio: float, ca_b: float) -> "MapValue":
-        """One quantity at a point inside the map's box (see :func:`query_map`)."""
-        delta = 1.0 - lam_ratio
-        x, c, notes = math.sqrt(delta), math.log(ca_b), []
-        clamp = None
-        if ca_b > self.cas[-1] * (1 + _ON_NODE):
+    # ---------------------------------------------------------------- the arithmetic
+    def _evaluate(self, st, table: _Table, loo: dict) -> tuple:
+        """(y, interpolation error, solver error, model error) of one quantity by stencil
+        ``st`` from its :class:`_Table` and LOO errors ``loo`` (:meth:`_loo_table`): each summed
+        along the stencil on its own (:func:`_sum_values`, :func:`_sum_interpolation`,
+        :func:`_sum_errors`); the errors in y, None where unknown. Without any solver error
+        on the lines reached the solver error is unknown, and on BEM nodes only the model
+        error is 0 (each node's is), both without summing."""
+        bem_only = all(method == "bem" for method, _ in st.kinds)
+        return (_sum_values(st, table.y), _sum_interpolation(st, loo),
+                _sum_errors(st, table.solver) if table.has_solver else None,
+                0.0 if bem_only else _sum_errors(st, table.model))
+
+    def _interpolate(self, q, log, nu, x, c, corners=None, exclude=None, shared=None):
+        """Quantity ``q`` (transformed; in its logarithm if ``log``) at (nu, x = δ^½,
+        c = log Ca_B) as a _Part, or the reason there is none. ``shared``: the answer of
+        :meth:`_stencil` at this point with no failed node, used unless ``q`` fails at one of
+        the nodes it looked at (then ``q`` gets its own: with none of them failed it would
+        take the same steps to the same stencil)."""
+        table = self._table(q, log, frozenset() if shared is None else shared[2])
+        if shared is None or (table.failed and not table.failed.keys().isdisjoint(shared[1])):
+            shared = self._stencil(nu, x, c, corners, exclude, table)
+        st, notes = shared[0], table.notes
+        if isinstance(st, str):
+            return st
+        y, interp, solver, model = self._evaluate(st, table, self._loo_table(q))
+        # the notes of the leaves, each once, in the order of the leaves
+        leaves = () if not notes else (st,) if isinstance(st, _Leaf) else st.leaves()
+        return _Part(y, interp, solver, model, st.rows,
+                     tuple(dict.fromkeys(n for leaf in leaves for n in notes.get(leaf.node, ()))))
+
+    # ---------------------------------------------------------------- a query
+    def quantities(self, nu: float, lam_ratio: float, ca_b: float,
+                   names=tuple(QUANTITIES)) -> dict:
+        """The quantities ``names`` at a point inside the map's box (see :func:`query_map`):
+        {name: :class:`MapValue`}. Their stencil is found once."""
+        x, c, notes = math.sqrt(1.0 - lam_ratio), math.log(ca_b), []
+        clamp = ca_b > self.cas[-1] * (1 + _ON_NODE)
+        if clamp:
             c = math.log(self.cas[-1])
             notes.append(f"Ca_B={ca_b:.6g} above the map's largest {self.cas[-1]:g}: value at "
                          f"Ca_B={self.cas[-1]:g} (shapes nearly independent of Ca_B >= 50, Chen "
                          "et al. 2020), with the measured change between the two largest Ca_B "
                          "as model error")
-            clamp = True
-        log = self._log_usable(q)
-        self._query = (self._bracket(self.nus, nu), self._bracket(self.cas, math.exp(c)),
-                       lam_ratio, {})
-        part = self._interpolate(q, log, nu, x, c)
-        if isinstance(part, str) and log and part == "not positive":
-            log = False
-            part = self._interpolate(q, log, nu, x, c)
-        if isinstance(part, str):
-            return MapValue(None, note=part if part != "outside" else "outside the map")
-        if clamp:
-            other = (self._interpolate(q, log, nu, x, math.log(self.cas[-2]))
-                     if len(self.cas) > 1 else "no second Ca_B")
-            if isinstance(other, str):
-                part.model = None
-                notes.append(f"clamp error unknown ({other})")
-            else:
-                part.model = _add(part.model, abs(part.y - other.y))
+        corners = self._corners(nu, math.exp(c), lam_ratio)
+        shared = self._stencil(nu, x, c, corners=corners)
+        # the clamp's model error: the change to the second largest Ca_B (its value only)
+        c2 = math.log(self.cas[-2]) if clamp and len(self.cas) > 1 else None
+        shared2 = self._stencil(nu, x, c2) if c2 is not None else None
+        out, described = {}, {}
+        for q in names:
+            log = TRANSFORMS[q]["log"]
+            part = self._interpolate(q, log, nu, x, c, corners, shared=shared)
+            if isinstance(part, str) and log and part == "not positive":
+                log = False
+                part = self._interpolate(q, log, nu, x, c, corners, shared=shared)
+            if isinstance(part, str):
+                out[q] = MapValue(None, note=part if part != "outside" else "outside the map")
+                continue
+            q_notes = list(notes)
+            if clamp:
+                other = (self._interpolate(q, log, nu, x, c2, shared=shared2)
+                         if c2 is not None else "no second Ca_B")
+                if isinstance(other, str):
+                    part.model = None
+                    q_notes.append(f"clamp error unknown ({other})")
+                else:
+                    part.model = _add(part.model, abs(part.y - other.y))
+            out[q] = self._map_value(q, part, lam_ratio, log, q_notes, described)
+        return out
+
+    def quantity(self, q: str, nu: float, lam_ratio: float, ca_b: float) -> MapValue:
+        """One quantity at a point inside the map's box (see :func:`query_map`)."""
+        return self.quantities(nu, lam_ratio, ca_b, (q,))[q]
+
+    def _map_value(self, q: str, part: _Part, lam_ratio: float, log: bool, notes: list,
+                   described: dict) -> MapValue:
+        """The :class:`MapValue` of an interpolation: value and error parts in q's units.
+        ``described``: {rows: (methods, sorted rows)} of the query (the quantities share
+        their rows)."""
         value = _inverse(q, part.y, lam_ratio, log)
-        t = TRANSFORMS[q]
-
-        def to_value(e):
-            if e is None:
-                return None
-            if log:
-                return abs(value - t["offset"]) * math.expm1(e)
-            return e / _scale(q, lam_ratio)
-
-        methods = tuple(sorted({self.columns["method"][r] for r in part.rows}))
-        known = [to_value(e) for e in (part.interp, part.solver, part.model) if e is not None]
-        unknown = [name for name, e in (("interpolation", part.interp), ("solver", part.solver),
-                                        ("model", part.model)) if e is None]
+        if log:
+            base = abs(value - TRANSFORMS[q]["offset"])
+            errors = [None if e is None else base * math.expm1(e)
+                      for e in (part.interp, part.solver, part.model)]
+        else:
+            scale = _scale(q, lam_ratio)
+            errors = [None if e is None else e / scale
+                      for e in (part.interp, part.solver, part.model)]
+        unknown = [name for name, e in zip(("interpolation", "solver", "model"), errors)
+                   if e is None]
         if unknown:
             notes.append("error without the unknown " + ", ".join(unknown) + " part")
-        return MapValue(value, error=sum(known), interpolation_error=to_value(part.interp),
-                        solver_error=to_value(part.solver), model_error=to_value(part.model),
-                        methods=methods, rows=tuple(sorted(part.rows)),
+        if part.rows not in described:
+            described[part.rows] = (tuple(sorted({self.columns["method"][r] for r in part.rows})),
+                                    tuple(sorted(part.rows)))
+        methods, rows = described[part.rows]
+        return MapValue(value, error=sum([e for e in errors if e is not None]),
+                        interpolation_error=errors[0], solver_error=errors[1],
+                        model_error=errors[2], methods=methods, rows=rows,
                         note="; ".join(list(part.notes) + notes))
 
     def shape_class(self, rows) -> "MapValue":
@@ -741,7 +1015,6 @@ class SolutionMap:
         """Columns ``loo_<axis>_<q>``: the LOO error (in the interpolated variable) of every
         row that is a node's chosen point (None for the others and where no estimate exists)."""
         out = {f"loo_{a}_{q}": [None] * self.n for a in _AXES for q in QUANTITIES}
-        self._query = None
         for i_nu, nu in enumerate(self.nus):
             for i_ca, ca in enumerate(self.cas):
                 for k, (x, ratio) in enumerate(zip(self.xs, self._ratio_of)):
@@ -749,7 +1022,7 @@ class SolutionMap:
                     if row is None or self.superseded(nu, ratio, ca):
                         continue
                     for q in QUANTITIES:
-                        log = self._log_usable(q)
+                        log = TRANSFORMS[q]["log"]
                         y0 = _transform(q, self.value(row, q), ratio, log)
                         if y0 is None:
                             log = False
@@ -757,7 +1030,8 @@ class SolutionMap:
                         if y0 is None:
                             continue
                         for axis, index in (("lam", k), ("nu", i_nu), ("ca", i_ca)):
-                            p = self._interpolate(q, log, nu, x, self._cs[i_ca], (axis, index))
+                            p = self._interpolate(q, log, nu, x, self._cs[i_ca],
+                                                  exclude=(axis, index))
                             if not isinstance(p, str):
                                 out[f"loo_{axis}_{q}"][row] = float(f"{abs(p.y - y0):.3g}")
         return out
@@ -924,12 +1198,10 @@ def query_map(nu: float, lam_ratio: float, ca_b: float, map=None) -> MapQuery:
     ca_b = float(check_positive("ca_b", ca_b))
     m = map if isinstance(map, SolutionMap) else load_map(map)
     reason = outside_reason(m, nu, lam_ratio, ca_b)
-    out = {}
     if reason:
         out = {q: MapValue(None, note=reason) for q in (*QUANTITIES, "shape_class")}
     else:
-        for q in QUANTITIES:
-            out[q] = m.quantity(q, nu, lam_ratio, ca_b)
+        out = m.quantities(nu, lam_ratio, ca_b)
         rows = out["V_over_U"].rows or out["ell"].rows
         out["shape_class"] = (m.shape_class(rows) if rows else
                               MapValue(None, note=out["V_over_U"].note))

@@ -3,21 +3,29 @@
 
 Independent reference for the interpolation: an analytic function of (nu, lam/lam_c, Ca_B),
 stored as a fake build, must be reproduced exactly at the nodes and within the stated error bar
-between them.
+between them. The shipped map's answers are held to those of the query as it was before it
+computed its stencil once for the eight quantities (tests/correlations/data/
+solution_map_queries.json, written by tests/benchmarks/map_query_speed.py --write-reference from
+that revision), and its pack to the shipped file.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
+import sys
+from pathlib import Path
 
 import pytest
 
 from lubrication.geometry import critical_confinement
 from correlations import map_build
+from correlations.files import read_json
 from correlations.map_build import build_map, line_tasks, make_grid
-from correlations.solution_map import (POINT_FORMAT, QUANTITIES, TRANSFORMS, load_map, pack_map,
-                                       point_filename, query_map, read_points)
+from correlations.solution_map import (DEFAULT_MAP, POINT_FORMAT, QUANTITIES, TRANSFORMS,
+                                       load_map, pack_map, point_filename, query_map,
+                                       read_points)
 
 # ----------------------------------------------------------------------------- analytic map
 
@@ -169,6 +177,71 @@ def test_packed_file_is_compact_json_with_units_holes_and_loo(tmp_path):
     assert any(v is not None for v in data["columns"]["loo_lam_dp_plus_R0"])
 
 
+# ----------------------------------------------------------------------------- the shipped map
+
+REFERENCE = Path(__file__).parent / "data" / "solution_map_queries.json"
+BUILD = DEFAULT_MAP.with_name("solution_map_build")
+#: Python adds floats in sum() term by term up to 3.11 (the reference's version) and with a
+#: compensation from 3.12 on, where the last bits may differ; there the fields are compared to
+#: 1e-13 of the quantity's magnitude (the map's values are packed to 1e-10).
+BIT_FOR_BIT = sys.version_info < (3, 12)
+REL = 1e-13
+
+
+def _same(got, expected, scale: float) -> bool:
+    """One field against the reference: bit for bit (``repr`` tells every double apart, -0.0
+    from 0.0), or within :data:`REL` where :data:`BIT_FOR_BIT` does not hold."""
+    if not BIT_FOR_BIT and isinstance(got, float) and isinstance(expected, float):
+        return math.isclose(got, expected, rel_tol=REL, abs_tol=REL * scale)
+    return repr(got) == repr(expected)
+
+
+def test_queries_of_the_shipped_map_equal_the_reference():
+    """At about 2400 points (inside the box, uniform in λ/λc and in δ^½; on nodes and within
+    their tolerance; next to every hole; Ca_B above the largest node, clamped and past 1e4;
+    λ/λc near 1; at and outside the box's edges) every field of every MapValue (value, error
+    and its three parts, methods, rows, note) equals the reference; so does
+    ``SolutionMap.quantity``, which computes one quantity alone, at every tenth point."""
+    if not DEFAULT_MAP.exists():
+        pytest.skip(f"no shipped map at {DEFAULT_MAP}")
+    ref = read_json(REFERENCE, name="reference", what="reference answers of query_map")
+    assert hashlib.sha256(DEFAULT_MAP.read_bytes()).hexdigest() == ref["map_sha256"], (
+        f"the shipped map is not the one of {REFERENCE.name}: make it again with "
+        f"'{ref['made_by']}'")
+    m = load_map()
+    compared = 0
+    for i, (nu, ratio, ca_b, answers) in enumerate(ref["points"]):
+        res = query_map(nu, ratio, ca_b, m)
+        assert list(res.quantities) == ref["keys"]
+        for key, a in zip(ref["keys"], answers):
+            expected = [*a[:5], ref["methods"][a[5]], ref["rows"][a[6]], ref["note"][a[7]]]
+            scale = max(1.0, abs(a[0])) if isinstance(a[0], float) else 1.0
+            values = [res.quantities[key]]
+            if i % 10 == 0 and key in QUANTITIES and res.quantities[key].rows:
+                values.append(m.quantity(key, nu, ratio, ca_b))
+            for v in values:
+                got = [v.value, v.error, v.interpolation_error, v.solver_error, v.model_error,
+                       list(v.methods), list(v.rows), v.note]
+                bad = {f: (g, e) for f, g, e in zip(ref["fields"], got, expected)
+                       if not _same(g, e, scale)}
+                assert not bad, (nu, ratio, ca_b, key, bad)
+                compared += len(got)
+    assert compared > 150_000, compared
+
+
+def test_packing_the_committed_build_gives_the_shipped_columns(tmp_path):
+    """The pack of the committed build folder holds the shipped map's columns, the leave-one-out
+    errors (interpolations of the map without each node) among them."""
+    if not (BUILD.is_dir() and DEFAULT_MAP.exists()):
+        pytest.skip(f"no shipped map with its build folder at {BUILD}")
+    what = "a packed map"
+    packed = read_json(pack_map(BUILD, tmp_path / "map.json"), name="map", what=what)
+    shipped = read_json(DEFAULT_MAP, name="map", what=what)
+    assert sorted(packed["columns"]) == sorted(shipped["columns"])
+    for name, column in shipped["columns"].items():
+        assert packed["columns"][name] == column, name
+
+
 # ----------------------------------------------------------------------------- a real tiny build
 
 TINY = {"nu": [0.9, 0.95], "lam_ratio": [0.9, 0.95, 0.98], "ca_b": [50.0],
@@ -239,7 +312,8 @@ def test_resume_solves_only_the_missing_points_and_warm_starts_from_the_stored_s
     assert first["failed"] == 1 and first["missing"] == 0
     (tmp_path / point_filename("bem", 0.8, 0.3, 50.0)).unlink()
     (tmp_path / point_filename("bem", 0.95, 0.3, 50.0)).unlink()
-    (tmp_path / ".bem_nu0.9_lr0.3_caB50.json.abc.tmp").write_text("{half")   # a killed write
+    # a killed write: atomic_write's temporary (.NAME.XXXXXXXX.tmp) of a point file
+    (tmp_path / ".bem_nu0.9_lr0.3_caB50.json.k2x_9ab0.tmp").write_text("{half")
     theirs = [tmp_path / ".notes.tmp", tmp_path / ".results.json.k3x9.tmp"]   # not the build's
     for f in theirs:
         f.write_text("the user's")
