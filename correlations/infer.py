@@ -203,11 +203,13 @@ def _query(m, nu: float, ratio: float, ca_of):
 def _speed_length(m, nu: float, ratio: float, ca_of):
     """The map's (V/U, ℓ) :class:`MapValue` pair at (ν, λ/λc), Ca_B = ``ca_of(λ)``; None
     outside the map or next to a hole. Only these two of the map's quantities are
-    interpolated: the fit calls this hundreds of times (query_map computes all eight)."""
+    interpolated, on one stencil: the fit calls this hundreds of times, the posterior
+    thousands (query_map computes all eight)."""
     ca_b = ca_of(ratio * float(critical_confinement(nu)))
     if outside_reason(m, nu, ratio, ca_b):
         return None
-    v, ell = m.quantity("V_over_U", nu, ratio, ca_b), m.quantity("ell", nu, ratio, ca_b)
+    pair = m.quantities(nu, ratio, ca_b, ("V_over_U", "ell"))
+    v, ell = pair["V_over_U"], pair["ell"]
     if v.value is None or ell.value is None:
         return None
     return v, ell
@@ -451,7 +453,7 @@ def _posterior_quantities(m, target, sigma, ca_of, d, scales, centre, seed, ca_f
     method = ("posterior over the whole map (flat prior in nu and lam/lam_c"
               + (" and log Ca_B" if ca_free else "") + "; likelihood of V/U and ell: the "
               "measurement's Gaussian with the map's own error, a mixture fitted to its errors "
-              f"off its nodes; {post.evaluations} map points, "
+              f"against direct BEM solves; {post.evaluations} map points, "
               f"{time.perf_counter() - start:.1f} s): the value is the best fit's, the "
               "intervals the shortest holding 68 % and 95 % of the posterior (outputs widened by "
               "their map error), the error half the 68 % interval")
