@@ -1567,7 +1567,7 @@ class _Survey:
     a row. ``kept``: row number -> (row, checks, notes) of the ``keep`` checked rows of highest
     rank before the series checks (None: all), most of which are listed in the end."""
 
-    def __init__(self, rows, bem: bool, m, keep: int | None):
+    def __init__(self, rows, bem: bool, m, keep: int | None, progress=None):
         keys, ranked, self.solid = {}, [], False
         self.default_ca = [0, []]           # vesicle rows without ca_b: number, the first 10
         series, self.values = array.array("i"), array.array("d")
@@ -1575,6 +1575,8 @@ class _Survey:
         none = (math.nan,) * 5
         n = 0
         for n, line, cells in rows:
+            if progress is not None and n % PROGRESS_ROWS == 0:
+                progress(n)
             row = parse_row(cells, n, _where(n, line))
             v, kind = row.values, row.kind
             nu, lam = v.get("nu", 1.0), v["lam"]
@@ -1627,8 +1629,13 @@ def _offer(ranked: list, keep: int | None, key: tuple, item) -> None:
         heapq.heapreplace(ranked, (key, item))
 
 
+#: Rows between two calls of :func:`check_summary`'s ``progress`` (a second or less of rows
+#: that need a map query).
+PROGRESS_ROWS = 2000
+
+
 def check_summary(rows_or_path, *, bem: bool = True, solution_map=None,
-                  keep: int | None = MAX_LISTED_ROWS) -> CheckReport:
+                  keep: int | None = MAX_LISTED_ROWS, progress=None) -> CheckReport:
     r"""The consistency check of ``rows_or_path`` in bounded memory: the verdict counts of
     every row and the :class:`RowReport` of at most ``keep`` rows (None: all), the failing ones
     first, then those with warnings, then passing ones, each in file order (listed in file
@@ -1645,15 +1652,16 @@ def check_summary(rows_or_path, *, bem: bool = True, solution_map=None,
     be listed whose report was not kept (a series check made them worse) and the rows that
     need a solver (a second or so per (λ, Ca), cached), each checked once.
 
-    Parameters and errors as :func:`check_results`; ``keep`` >= 0 or None. A file that changes
-    between the two passes raises :class:`InputError`.
+    Parameters and errors as :func:`check_results`; ``keep`` >= 0 or None; ``progress(n)``, if
+    given, is called in the first pass after every :data:`PROGRESS_ROWS` rows. A file that
+    changes between the two passes raises :class:`InputError`.
     """
     if keep is not None and keep < 0:
         raise InvalidParameterError("keep", keep, "keep >= 0 or None")
     source, rows, path = _source(rows_or_path)
     m = _resolve_map(solution_map)
     stat = None if path is None else os.stat(path)
-    survey = _Survey(rows(), bem, m, keep)
+    survey = _Survey(rows(), bem, m, keep, progress)
     deferred = survey.rank == _DEFERRED
     counts = np.bincount(survey.rank[~deferred], minlength=3)
     checked = np.flatnonzero(~deferred)

@@ -23,6 +23,7 @@ import base64
 import html
 import io
 import sys
+import time
 from pathlib import Path
 
 from lubrication.io import atomic_write
@@ -43,7 +44,7 @@ def cmd_check(args):
         check_targets("--report", files=[Path(args.report).with_suffix(".png")])
     with options_named({"map": "--map"}, args):
         report = check_summary(args.file, bem=not args.no_bem, solution_map=args.map,
-                               keep=args.listed_rows)
+                               keep=args.listed_rows, progress=_progress())
     failed = report.counts["fail"]
     # "converged" as the contract pairs it with the exit status: false when a row failed (exit 1)
     out = {"command": "check", "converged": not failed, **report.to_dict()}
@@ -54,6 +55,23 @@ def cmd_check(args):
         print(f"vesicle-tube check: {failed} of {report.n_rows} rows failed a check"
               + (f"; the first: {first[0]}" if first else ""), file=sys.stderr)
     return out, report.format_table()
+
+
+def _progress():
+    """On a terminal, a line on stderr every 5 s of a long check (rows read, rate); None when
+    stderr is a pipe or a file, whose readers want one message or none."""
+    if not sys.stderr.isatty():
+        return None
+    start = last = time.monotonic()
+
+    def report(n: int) -> None:
+        nonlocal last
+        now = time.monotonic()
+        if now - last >= 5.0:
+            last = now
+            print(f"vesicle-tube check: {n} rows read ({n / (now - start):.0f} rows/s)",
+                  file=sys.stderr, flush=True)
+    return report
 
 
 # --------------------------------------------------------------------------- the report

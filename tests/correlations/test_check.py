@@ -692,6 +692,17 @@ def test_checking_many_rows_holds_a_bounded_part_of_them(tmp_path):
     assert peak < 0.1 * n * per_row, (peak, per_row)
 
 
+def test_a_long_check_reports_its_progress(tmp_path):
+    """check_summary calls ``progress(n)`` at every PROGRESS_ROWS rows of the first pass, with
+    the count of rows read, and its result is that of a check without it."""
+    n = 2 * check.PROGRESS_ROWS + 7
+    path = _write_csv(tmp_path / "rows.csv", _sphere_rows(n))
+    seen = []
+    summary = check_summary(path, bem=False, keep=5, progress=seen.append)
+    assert seen == [check.PROGRESS_ROWS, 2 * check.PROGRESS_ROWS]
+    assert summary.counts == check_summary(path, bem=False, keep=5).counts
+
+
 def _exe() -> str:
     return shutil.which("vesicle-tube") or str(Path(sys.executable).with_name("vesicle-tube"))
 
