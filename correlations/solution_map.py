@@ -1227,9 +1227,11 @@ def outside_reason(m: SolutionMap, nu: float, lam_ratio: float, ca_b: float) -> 
 
 # --------------------------------------------------------------------------- pack
 
-def pack_map(folder, out=None) -> Path:
+def pack_map(folder, out=None, points=None) -> Path:
     """Pack the finished points of build folder ``folder`` into one file (format
     :data:`FORMAT`), atomically; default ``<folder>/solution_map.json``. Returns the path.
+    ``points``: the folder's points as :func:`read_points` gives them, when the caller has
+    read them already (default: read here).
 
     The file holds ``grid``, ``parameters`` and ``provenance`` (from ``build.json``), the
     ``units`` of every column, ``columns`` (the converged points, one list per column, no
@@ -1248,7 +1250,7 @@ def pack_map(folder, out=None) -> Path:
     build = read_build(folder)
     grid = build["grid"]
     stored = {_key(p["nu"], p["lam_ratio"], p["ca_b"]) + (p["method"],): p
-              for p in read_points(folder)}
+              for p in (read_points(folder) if points is None else points)}
     errors = sorted({f"err_{q}" for p in stored.values()
                      for q in (p.get("error_estimate") or {}) if q in QUANTITIES})
     names = [*_BASE_COLUMNS, *QUANTITIES, *errors]

@@ -232,7 +232,7 @@ def cmd_map_pack(args):
             raise UsageError(f"DIR {args.folder}: no converged point to pack ({stored}); a "
                              "map of holes answers no query: build it first ('vesicle-tube map "
                              f"build --out {args.folder}')")
-        packed = pack_map(args.folder, target)
+        packed = pack_map(args.folder, target, points)
     path = Path(packed)
     data = read_json(path, name="--out" if target is not None else "DIR",
                      what="the packed map just written")
