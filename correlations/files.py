@@ -38,11 +38,18 @@ MAX_INT_DIGITS = 30
 class UnreadableFile(InvalidParameterError):
     """A file given as input is missing, not a regular file, too large, not UTF-8, malformed,
     or does not hold what its reader expects. ``name`` is the option or parameter that gave it,
-    ``value`` the path."""
+    ``value`` the path, ``detail`` the message after the name (the file, what is wrong and
+    what was expected)."""
 
     def __init__(self, name: str, path, what: str, reason: str):
         self.name, self.value, self.valid, self.path = name, str(path), what, str(path)
-        ValueError.__init__(self, f"{name} {short_path(path)}: {reason} (expected {what})")
+        self.detail = f"{short_path(path)}: {reason} (expected {what})"
+        ValueError.__init__(self, f"{name} {self.detail}")
+
+
+def _reason(exc: OSError) -> str:
+    """The operating system's reason for ``exc``, as a message continues it."""
+    return (exc.strerror or str(exc)).lower()
 
 
 def _size_text(n: int) -> str:
@@ -68,7 +75,7 @@ def check_input_file(path, *, name: str, what: str, max_bytes: int | None = None
     try:
         st = os.stat(p)
     except OSError as exc:
-        raise UnreadableFile(name, path, what, (exc.strerror or str(exc)).lower()) from None
+        raise UnreadableFile(name, path, what, _reason(exc)) from None
     except ValueError as exc:       # an embedded NUL character
         raise UnreadableFile(name, ascii(str(path)), what, str(exc)) from None
     if stat.S_ISDIR(st.st_mode):
@@ -92,7 +99,7 @@ def open_text(path, *, name: str, what: str):
     try:
         return p.open(encoding="utf-8-sig", newline="")
     except OSError as exc:
-        raise UnreadableFile(name, path, what, (exc.strerror or str(exc)).lower()) from None
+        raise UnreadableFile(name, path, what, _reason(exc)) from None
 
 
 def read_text(path, *, name: str, what: str, max_bytes: int = MAX_JSON_BYTES) -> str:
@@ -104,7 +111,7 @@ def read_text(path, *, name: str, what: str, max_bytes: int = MAX_JSON_BYTES) ->
         with p.open("rb") as f:
             raw = f.read(max_bytes + 1)
     except OSError as exc:
-        raise UnreadableFile(name, path, what, (exc.strerror or str(exc)).lower()) from None
+        raise UnreadableFile(name, path, what, _reason(exc)) from None
     if len(raw) > max_bytes:
         raise UnreadableFile(name, path, what, f"the file grew beyond {_size_text(max_bytes)} "
                              "while read")

@@ -127,7 +127,7 @@ def options_named(options: dict, args=None):
         default = args is not None and getattr(args, dest, None) is None
         option += " (default)" if default else ""
         if isinstance(exc, UnreadableFile):
-            raise UsageError(f"{option} {str(exc)[len(exc.name) + 1:]}") from None
+            raise UsageError(f"{option} {exc.detail}") from None
         raise UsageError(f"{option}: {exc}") from None
 
 
