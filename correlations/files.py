@@ -139,15 +139,22 @@ def _constant(text: str):
     raise ValueError(f"{text} is not strict JSON (write a missing number as null)")
 
 
+_CONTAINERS = frozenset((dict, list))
+
+
 def _depth(data) -> int:
-    """Nesting depth of parsed JSON, without recursion."""
+    """Nesting depth of parsed JSON, without recursion. Only containers are visited: a list of
+    numbers (the columns of a map, tens of thousands of values) is passed over by a test of
+    its elements' types that runs in C."""
+    if type(data) not in _CONTAINERS:
+        return 0
     deepest, stack = 0, [(data, 1)]
     while stack:
         item, level = stack.pop()
-        if isinstance(item, (dict, list)):
-            deepest = max(deepest, level)
-            stack.extend((v, level + 1) for v in (item.values() if isinstance(item, dict)
-                                                  else item))
+        deepest = max(deepest, level)
+        children = item.values() if type(item) is dict else item
+        if not _CONTAINERS.isdisjoint(map(type, children)):
+            stack.extend((v, level + 1) for v in children if type(v) in _CONTAINERS)
     return deepest
 
 
