@@ -42,8 +42,8 @@ from pathlib import Path
 import lubrication   # the package's __version__, read at call time (no import-order dependency)
 
 __all__ = ["TEMPORARY_EXTRA", "WriteError", "atomic_write", "temporary_target", "clean_json",
-           "forget_written_files", "make_folder", "path_limits", "provenance", "save_json", "save_result", "write_json",
-           "written_files"]
+           "forget_written_files", "make_folder", "path_limits", "provenance", "save_json",
+           "save_result", "write_json", "written_files"]
 
 # Every file completed by atomic_write in this process, in order: the command line names them
 # after a run, and after an interrupt (each of them is complete).
