@@ -51,13 +51,9 @@ def film_thickness_chen2020(nu, lam):
 
     Chen et al. 2020 eq. sfilm2 (from the geometric expansion of Barakat & Shaqfeh 2018a); the
     BEM films approach it for :math:`1 - \lambda/\lambda_c < 0.1` (:data:`FILM_RANGE_CHEN2020`,
-    warned outside). It is :func:`~lubrication.geometry.clearance` with that warning, and takes
-    its ``nu`` and ``lam``: lam >= lam_c(nu) raises :class:`~lubrication.checks.CannotPassError`.
-
-    Returns
-    -------
-    delta : float or ndarray
-        Film thickness h/R [-].
+    warned outside). It is :func:`~lubrication.geometry.clearance` with that warning: the same
+    ``nu`` and ``lam`` (lam >= lam_c(nu) raises :class:`~lubrication.checks.CannotPassError`)
+    and the same value, read as the film thickness h/R.
 
     Examples
     --------
@@ -92,7 +88,7 @@ def film_from_capillary_chen2020(ca_v, c0=C0_CHEN2020):
     Returns
     -------
     delta : float or ndarray
-        Film thickness h/R [-].
+        Film thickness h/R, 0 < delta < 1 [-].
 
     Examples
     --------

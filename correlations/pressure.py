@@ -25,8 +25,6 @@ __all__ = [
     "dp_plus_small_sphere_coupling",
 ]
 
-# Docstring sections repeat on purpose: each published law documents its V/U input (STYLE.md).
-
 # Chen et al. 2020 fig. dpa_film: compiled from "highly confined vesicles (lam -> lam_c)"; the
 # same simulations approach the near-critical asymptotes for delta = 1 - lam/lam_c < 0.1.
 DP_PLUS_FILM_RANGE_CHEN2020 = ValidityRange.of("Chen et al. 2020 fig. dpa_film", delta=(0.0, 0.1))
@@ -42,10 +40,13 @@ DP_PLUS_SMALL_SPHERE_COUPLING_RANGE = ValidityRange.of(
     "Chen et al. 2020 eq. dpa_v (eq. small1/small2 for lam <= 0.5)", V_over_U=(5.0 / 3.0, 2.0))
 
 
-def _check_speed(V_over_U) -> np.ndarray:
-    return check_range("V_over_U", V_over_U, 1.0, 2.0,
-                       reason="a vesicle on the axis moves between the mean (1) and the "
-                              "centreline (2) velocity")
+def _check_speed(V_over_U, valid: ValidityRange, law: str) -> np.ndarray:
+    """Checked ``V_over_U`` of the law ``law``: 1 <= V/U <= 2, warned outside ``valid``."""
+    V_over_U = check_range("V_over_U", V_over_U, 1.0, 2.0,
+                           reason="a vesicle on the axis moves between the mean (1) and the "
+                                  "centreline (2) velocity")
+    valid.warn_outside(law, stacklevel=4, V_over_U=V_over_U)
+    return V_over_U
 
 
 def dp_plus_film_chen2020(lam, ell, delta):
@@ -127,8 +128,8 @@ def dp_plus_speed_fit_chen2020(V_over_U):
     >>> round(dp_plus_speed_fit_chen2020(1 / 0.6), 4)
     0.4883
     """
-    V_over_U = _check_speed(V_over_U)
-    DP_PLUS_SPEED_FIT_RANGE_CHEN2020.warn_outside("dp_plus_speed_fit_chen2020", V_over_U=V_over_U)
+    V_over_U = _check_speed(V_over_U, DP_PLUS_SPEED_FIT_RANGE_CHEN2020,
+                            "dp_plus_speed_fit_chen2020")
     return scalar_or_array(3e-6 * np.exp(20.0 / V_over_U))
 
 
@@ -140,24 +141,18 @@ def dp_plus_small_sphere_coupling(V_over_U):
     Chen et al. 2020 eq. dpa_v: :math:`\lambda` eliminated between eq. small1
     (:math:`V/U = 2 - \tfrac{4}{3}\lambda^2`) and eq. small2 (:math:`16\lambda^6`); exact for the
     truncated laws. Established where those hold, lam <= 0.5, i.e. V/U >= 5/3
-    (:data:`DP_PLUS_SMALL_SPHERE_COUPLING_RANGE`, warned outside).
-
-    Parameters
-    ----------
-    V_over_U : float or array_like
-        Sphere speed over mean velocity, 1 <= V_over_U <= 2 [-].
-
-    Returns
-    -------
-    dp_plus_R0 : float or ndarray
-        :math:`\Delta p^+a/(\eta U)` [-].
+    (:data:`DP_PLUS_SMALL_SPHERE_COUPLING_RANGE`, warned outside). ``V_over_U``, here the
+    sphere's speed, and the result as in :func:`dp_plus_speed_fit_chen2020`, with the sphere
+    radius :math:`a` for :math:`R_0`.
 
     Examples
     --------
-    >>> round(dp_plus_small_sphere_coupling(5 / 3), 12)
-    0.25
+    The pressure drop at the speed of eq. small1 is that of eq. small2:
+
+    >>> from lubrication.asymptotics import dp_plus_small_sphere, speed_small_sphere
+    >>> round(dp_plus_small_sphere_coupling(speed_small_sphere(0.5)), 12), dp_plus_small_sphere(0.5)
+    (0.25, 0.25)
     """
-    V_over_U = _check_speed(V_over_U)
-    DP_PLUS_SMALL_SPHERE_COUPLING_RANGE.warn_outside("dp_plus_small_sphere_coupling",
-                                                V_over_U=V_over_U)
+    V_over_U = _check_speed(V_over_U, DP_PLUS_SMALL_SPHERE_COUPLING_RANGE,
+                            "dp_plus_small_sphere_coupling")
     return scalar_or_array(6.75 * (2.0 - V_over_U) ** 3)

@@ -3,9 +3,11 @@ r"""Small-object and near-critical asymptotic laws for the speed and extra press
 Nondimensionalisation (stated once): :math:`\lambda = R_0/R` (for a sphere :math:`a/R`), ``nu``
 the reduced volume, :math:`\lambda_c(\nu)` the critical confinement,
 :math:`\delta = 1 - \lambda/\lambda_c`, :math:`U` the **mean** velocity of the undisturbed
-Poiseuille flow (centreline :math:`2U`), :math:`V` the object velocity. Speeds are returned as
-``V/U``; extra pressure drops at fixed flow rate as ``dp_plus_R0`` :math:`=\Delta p^+R_0/(\eta U)`
-(:math:`\Delta p^+a/(\eta U)` for a sphere or a drop of radius :math:`a`).
+Poiseuille flow (centreline :math:`2U`), :math:`V` the object velocity. The results, described
+here once rather than in each law: a float for scalar input, else an ndarray; speeds as
+``V_over_U`` :math:`= V/U`, extra pressure drops at fixed flow rate as ``dp_plus_R0``
+:math:`=\Delta p^+R_0/(\eta U)` (:math:`\Delta p^+a/(\eta U)` for a sphere or a drop of radius
+:math:`a`).
 
 Two limits bracket the behaviour of a vesicle in a tube:
 
@@ -69,10 +71,15 @@ NEAR_CRITICAL_RANGE = ValidityRange.of("Chen et al. 2020 eq. asmyp (delta = 1 - 
                                        delta=(0.0, 0.1))
 
 
-def _check_sphere_lam(lam) -> np.ndarray:
-    """0 < lam < 1: a sphere fits the tube only if a < R (lam_c(nu=1) = 1)."""
+def _check_small_lam(lam, valid: ValidityRange, law: str) -> np.ndarray:
+    """Checked ``lam`` of the small-object law ``law``, warned outside ``valid``.
+
+    0 < lam < 1: a sphere fits the tube only if a < R (lam_c(nu=1) = 1).
+    """
     check_passes(1.0, lam)
-    return np.asarray(lam, dtype=float)
+    lam = np.asarray(lam, dtype=float)
+    valid.warn_outside(law, stacklevel=4, lam=lam)
+    return lam
 
 
 def speed_small_sphere(lam):
@@ -91,11 +98,6 @@ def speed_small_sphere(lam):
         Size ratio a/R (R0/R for a vesicle), 0 < lam < 1 [-]. Accurate to 1 % for lam <= 0.5
         (:data:`SMALL_SPHERE_RANGE`); an :class:`OutOfRangeWarning` is emitted above.
 
-    Returns
-    -------
-    V_over_U : float or ndarray
-        Sphere velocity over the mean flow velocity [-].
-
     Examples
     --------
     >>> speed_small_sphere(0.3)
@@ -103,8 +105,7 @@ def speed_small_sphere(lam):
     >>> speed_small_sphere([0.1, 0.5])
     array([1.98666667, 1.66666667])
     """
-    lam = _check_sphere_lam(lam)
-    SMALL_SPHERE_RANGE.warn_outside("speed_small_sphere", lam=lam)
+    lam = _check_small_lam(lam, SMALL_SPHERE_RANGE, "speed_small_sphere")
     return scalar_or_array(2.0 - 4.0 / 3.0 * lam**2)
 
 
@@ -117,18 +118,12 @@ def dp_plus_small_sphere(lam):
     Scaled with the sphere radius :math:`a` (= :math:`R_0` for a vesicle); ``lam`` and its
     range as in :func:`speed_small_sphere`.
 
-    Returns
-    -------
-    dp_plus_R0 : float or ndarray
-        :math:`\Delta p^+ a/(\eta U)` [-].
-
     Examples
     --------
     >>> dp_plus_small_sphere(0.5)
     0.25
     """
-    lam = _check_sphere_lam(lam)
-    SMALL_SPHERE_RANGE.warn_outside("dp_plus_small_sphere", lam=lam)
+    lam = _check_small_lam(lam, SMALL_SPHERE_RANGE, "dp_plus_small_sphere")
     return scalar_or_array(16.0 * lam**6)
 
 
@@ -144,18 +139,12 @@ def speed_small_drop(lam):
     original papers. ``lam`` as in :func:`speed_small_sphere`, warned above 0.5
     (:data:`SMALL_DROP_RANGE`).
 
-    Returns
-    -------
-    V_over_U : float or ndarray
-        Drop velocity over the mean flow velocity [-].
-
     Examples
     --------
     >>> speed_small_drop(0.5)
     1.8
     """
-    lam = _check_sphere_lam(lam)
-    SMALL_DROP_RANGE.warn_outside("speed_small_drop", lam=lam)
+    lam = _check_small_lam(lam, SMALL_DROP_RANGE, "speed_small_drop")
     return scalar_or_array(2.0 - 0.8 * lam**2)
 
 
@@ -167,25 +156,23 @@ def dp_plus_small_drop(lam):
     Hetsroni, Haber & Wacholder 1970, viscosity ratio 1 (the rigid-sphere coefficient is 16,
     :func:`dp_plus_small_sphere`). ``lam`` as in :func:`speed_small_drop`.
 
-    Returns
-    -------
-    dp_plus_R0 : float or ndarray
-        :math:`\Delta p^+ a/(\eta U)` [-].
-
     Examples
     --------
     >>> round(dp_plus_small_drop(0.5), 6)
     0.075
     """
-    lam = _check_sphere_lam(lam)
-    SMALL_DROP_RANGE.warn_outside("dp_plus_small_drop", lam=lam)
+    lam = _check_small_lam(lam, SMALL_DROP_RANGE, "dp_plus_small_drop")
     return scalar_or_array(4.8 * lam**6)
 
 
-def _near_critical(nu, lam):
-    """Checked inputs -> (lam, delta, X) with X = lam_c^2 nu^(-2/3) = ell_c/2, broadcast."""
+def _near_critical(nu, lam, law: str):
+    """Checked inputs of the near-critical law ``law`` -> (lam, delta, X), broadcast.
+
+    X = lam_c^2 nu^(-2/3) = ell_c/2; warned outside NEAR_CRITICAL_RANGE.
+    """
     nu, lam, lam_c = check_confinement(nu, lam)
     delta = 1.0 - lam / lam_c
+    NEAR_CRITICAL_RANGE.warn_outside(law, stacklevel=4, delta=delta)
     X = lam_c**2 * nu ** (-2.0 / 3.0)
     return lam, delta, X
 
@@ -211,10 +198,8 @@ def speed_slope_near_critical(nu):
 
     Examples
     --------
-    >>> round(speed_slope_near_critical(0.9), 3)
-    1.074
-    >>> round(speed_slope_near_critical(1.0), 12)
-    1.333333333333
+    >>> speed_slope_near_critical([1.0, 0.9, 0.6])
+    array([1.33333333, 1.07373767, 1.01747888])
     """
     lam_c = np.asarray(critical_confinement(nu))   # checks nu
     X = lam_c**2 * np.asarray(nu, dtype=float) ** (-2.0 / 3.0)
@@ -235,18 +220,12 @@ def speed_near_critical(nu, lam):
     ``nu`` and ``lam`` as in :func:`~lubrication.geometry.clearance`: lam >= lam_c(nu) raises
     :class:`~lubrication.checks.CannotPassError`.
 
-    Returns
-    -------
-    V_over_U : float or ndarray
-        Vesicle velocity over the mean flow velocity [-].
-
     Examples
     --------
     >>> round(speed_near_critical(0.6, 1.94), 4)
     1.0212
     """
-    _, delta, _ = _near_critical(nu, lam)
-    NEAR_CRITICAL_RANGE.warn_outside("speed_near_critical", delta=delta)
+    _, delta, _ = _near_critical(nu, lam, "speed_near_critical")
     return scalar_or_array(1.0 + np.asarray(speed_slope_near_critical(nu)) * delta)
 
 
@@ -274,8 +253,7 @@ def dp_plus_near_critical(nu, lam):
     >>> round(dp_plus_near_critical(0.6, 1.94), 1)
     1698.4
     """
-    lam, delta, X = _near_critical(nu, lam)
-    NEAR_CRITICAL_RANGE.warn_outside("dp_plus_near_critical", delta=delta)
+    lam, delta, X = _near_critical(nu, lam, "dp_plus_near_critical")
     lead = 4.0 * lam * (X - 1.0) / delta
     second = lam * 4.0 * math.sqrt(2.0) * math.pi / (4.0 * X - 3.0) / np.sqrt(delta)
     return scalar_or_array(lead + second)

@@ -188,8 +188,8 @@ def pressure_gradient(r, Q):
 
     Examples
     --------
-    >>> round(pressure_gradient(0.9, 0.05), 4)
-    -305.2106
+    >>> pressure_gradient([0.5, 0.9], 0.05).round(4)
+    array([ -25.9709, -305.2106])
     """
     return scalar_or_array(gap_flow(_check_radius(r), as_finite("Q", Q))[0])
 
@@ -201,13 +201,8 @@ def membrane_shear_rate(r, Q):
 
     Chen et al. 2020 eq. shear (there multiplied by η). Positive when the fluid next to the
     membrane moves forward (+x). Diverges like :math:`1/(r\ln r)` at the poles. For
-    ``1 - r < SERIES_GAP`` the series :func:`membrane_shear_rate_series` is used. ``r`` and
-    ``Q`` as in :func:`pressure_gradient`.
-
-    Returns
-    -------
-    e_m : float or ndarray
-        Membrane shear rate [V/R].
+    ``1 - r < SERIES_GAP`` the series :func:`membrane_shear_rate_series` is used. ``r``, ``Q``
+    and the form of the result (float or ndarray) as in :func:`pressure_gradient`.
 
     Examples
     --------
@@ -222,17 +217,15 @@ def wall_shear_rate(r, Q):
 
     .. math:: e_w = \frac{G}{4}\left[2 + \frac{1 - r^2}{\ln r}\right] + \frac{1}{\ln r}
 
-    Momentum balance of the gap fluid: :math:`e_w = r e_m + G(1 - r^2)/2`. ``r`` and ``Q`` as in
-    :func:`pressure_gradient`.
-
-    Returns
-    -------
-    e_w : float or ndarray
-        Wall shear rate [V/R].
+    Momentum balance of the gap fluid: :math:`e_w = r e_m + G(1 - r^2)/2`. ``r``, ``Q`` and the
+    form of the result as in :func:`pressure_gradient`.
 
     Examples
     --------
-    >>> round(wall_shear_rate(0.9, 0.05), 5)
+    >>> r, Q = 0.9, 0.05
+    >>> round(wall_shear_rate(r, Q), 5)
+    -24.4975
+    >>> round(r * membrane_shear_rate(r, Q) + pressure_gradient(r, Q) * (1 - r**2) / 2, 5)
     -24.4975
     """
     return scalar_or_array(gap_flow(_check_radius(r), as_finite("Q", Q))[2])
@@ -244,7 +237,16 @@ def pressure_gradient_series(d, Q):
     .. math:: G = \frac{6Q}{d^3} - \frac{6 - 3Q}{d^2} - \frac{2 - \frac{7}{5}Q}{d}
               - \frac{9}{10} + \frac{3}{5}Q + \dots
 
-    (all seven coefficients in ``_G_SERIES``; derived with sympy).
+    Each ``*_series`` function sums seven terms, whose coefficients (``_G_SERIES``,
+    ``_EM_SERIES``, ``_EW_SERIES``) were derived with sympy from the exact form; the exact
+    functions switch to them for ``1 - r < SERIES_GAP``.
+
+    Parameters
+    ----------
+    d : float or array_like
+        Gap 1 - r, 0 < d < 1 [R].
+    Q : float or array_like
+        Leak-back flux parameter, as in :func:`pressure_gradient` [-].
 
     Examples
     --------
@@ -264,19 +266,8 @@ def membrane_shear_rate_series(d, Q):
               + d^4\left(\frac{237}{560} - \frac{45967}{56000}Q\right)
 
     Barakat & Shaqfeh 2018b (their code has 32/20 for 23/20; the coefficients here were derived
-    with sympy). Finite at the axis (d = 1), unlike the exact form.
-
-    Parameters
-    ----------
-    d : float or array_like
-        Gap 1 - r, 0 < d < 1 [R].
-    Q : float or array_like
-        Leak-back flux parameter, as in :func:`pressure_gradient` [-].
-
-    Returns
-    -------
-    e_m : float or ndarray
-        Membrane shear rate [V/R].
+    with sympy). Finite at the axis (d = 1), unlike the exact form. ``d`` and ``Q`` as in
+    :func:`pressure_gradient_series`.
 
     Examples
     --------
@@ -291,7 +282,8 @@ def wall_shear_rate_series(d, Q):
 
     .. math:: e_w = \frac{3Q}{d^2} - \frac{4 - Q}{d} + \frac{9}{20}Q + \dots
 
-    (all seven coefficients in ``_EW_SERIES``; derived with sympy).
+    ``d``, ``Q`` and the source of the coefficients (``_EW_SERIES``) as in
+    :func:`pressure_gradient_series`.
 
     Examples
     --------

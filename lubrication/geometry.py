@@ -130,7 +130,7 @@ def critical_length(nu):
     Returns
     -------
     ell_c : float or ndarray
-        Critical length L_c/R_c [-].
+        Critical length L_c/R_c [-], >= 2 (the sphere's).
 
     Examples
     --------
