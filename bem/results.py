@@ -259,7 +259,14 @@ class VesicleResult(_SpectralSolution, VesicleSolution):
     refinement : list
         (modes, residual, V/U, Δp⁺R0/(ηU), γ_max) of every level solved.
     seed : str
-        Origin of the initial shape ("lubrication", "spheroid", "initial", "continuation ...").
+        Origin of the initial shape that converged ("seed bank (...)", "lubrication",
+        "spheroid", "initial", "continuation ...").
+    failed_starts : list
+        The starts tried before it, each with the reason it failed (:func:`bem.vesicle.solve_vesicle`).
+    other_branch : dict
+        Where a steady state of the other shape class also exists at this point (a bistable
+        point): its ``shape_class``, ``seed`` and V_over_U, dp_plus_R0, ell, film_min; else
+        empty.
     psi : ndarray
         Tangent angle from the axis, rear to front pole, see :data:`VESICLE_PROFILE_COLUMNS`.
     tension_modes : ndarray
@@ -270,6 +277,8 @@ class VesicleResult(_SpectralSolution, VesicleSolution):
     wall_shear_max: float = math.nan
     refinement: list = field(default_factory=list)
     seed: str = ""
+    failed_starts: list = field(default_factory=list)
+    other_branch: dict = field(default_factory=dict)
     psi: np.ndarray = profile_field()
     tension_modes: np.ndarray = profile_field()
     wall_x: np.ndarray = profile_field()

@@ -84,7 +84,7 @@ from .solution_map import (POINT_FORMAT, POINT_GLOB, QUANTITIES, pack_map, point
 
 __all__ = ["DEFAULT_GRID", "DEFAULT_OPTIONS", "LOCK_NAME", "MAX_POINTS", "METHODS", "SOLVERS",
            "BuildInputError", "make_grid", "check_build", "max_workers", "line_tasks",
-           "solve_line", "build_map"]
+           "solve_line", "build_map", "write_seed_bank"]
 
 log = logging.getLogger(__name__)
 
@@ -847,3 +847,20 @@ def _parallel(folder, jobs, args, workers, client, state, report, lock_fd=None) 
         raise
     if executor is not None:
         executor.shutdown(wait=True)
+
+
+# --------------------------------------------------------------------------- seed bank
+
+def write_seed_bank(folder, out) -> Path:
+    """Write the converged BEM shapes of the build ``folder`` as a :class:`bem.seed_bank.SeedBank`
+    to ``out`` (``.npz``); returns the path. Densities are padded with zero terms to the longest
+    one (a zero term leaves the density unchanged)."""
+    from bem.seed_bank import SeedBank  # lazy: numpy-only, but off the build's input checks
+    shapes = [p for p in read_points(folder) if p["method"] == "bem" and p["success"]
+              and p.get("shape")]
+    width = max((len(p["shape"]["density"]) for p in shapes), default=0)
+    SeedBank.from_shapes(
+        (p["nu"], p["lam_ratio"], p["ca_b"], p["shape_class"], p["shape"]["modes"],
+         list(p["shape"]["density"]) + [0.0] * (width - len(p["shape"]["density"])))
+        for p in shapes).save(out)
+    return Path(out)
