@@ -105,7 +105,7 @@ class SeedBank:
         if shape_class is not None:
             d = np.where(self.shape_class == SHAPE_CLASSES.index(shape_class), d, np.inf)
         order = np.argsort(d, kind="stable")[:k]
-        return [self.seed(i, d[i]) for i in order if d[i] <= within]
+        return [self.seed(i, d[i]) for i in order if np.isfinite(d[i]) and d[i] <= within]
 
     def save(self, path) -> None:
         """Write the bank atomically as a compressed ``.npz`` (no pickled objects)."""

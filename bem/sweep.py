@@ -8,8 +8,8 @@ Method (natural-parameter continuation in lam): the points are solved in order o
 lam; the first starts from the seed :func:`bem.vesicle.solve_vesicle` chooses (the lubrication
 shape, or the caller's ``initial``), every later one from the last *converged* result
 (``initial=`` that :class:`~bem.results.VesicleResult`, whose spectral shape is the seed). Going
-from the less to the more confined shape is the direction :mod:`bem.vesicle` recommends: a cold
-start near lam_c can drift to a spurious, nearly closed film. A point that fails is kept in the
+from the less to the more confined shape is the direction :mod:`bem.vesicle.ladder` recommends:
+a cold start near lam_c can drift to a spurious, nearly closed film. A point that fails is kept in the
 output with ``success`` False and its reason, and the next point starts again from the last
 converged one.
 
@@ -27,7 +27,7 @@ line per point) and to the optional ``progress`` callback.
 
 Resource envelope: at most :data:`MAX_POINTS` = 100 points (checked before any solve; at
 seconds to minutes per point that is already hours), each point bounded as in
-:mod:`bem.vesicle`; ``max_time`` bounds the whole sweep (tested between points and, through
+:mod:`bem.vesicle.inputs`; ``max_time`` bounds the whole sweep (tested between points and, through
 each point's remaining budget, inside them): the points not reached are returned unsolved
 (``success`` False, the deadline's message).
 

@@ -177,11 +177,21 @@ def _vesicle_solver_options(args) -> dict:
             "max_modes": args.max_modes}
 
 
+def _other_branch(res) -> str:
+    """Note of the shape-class row where a second steady state exists (a bistable point)."""
+    other = res.other_branch if res.success else {}
+    if not other:
+        return ""
+    return (f"bistable: a {other['shape_class']} also exists (V/U {other['V_over_U']:.5g}); "
+            f"--branch {other['shape_class']}")
+
+
 def cmd_bem_vesicle(args):
     """Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the axis."""
     from bem.vesicle import solve_vesicle  # lazy: bem and scipy off the estimate's start-up
     with _options_named():           # the solver checks its inputs before any BEM work
         res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
+                            branch=args.branch, seed_bank=args.seed_bank,
                             max_time=args.max_time, **_vesicle_solver_options(args))
     out = _shape_result_json(res, "vesicle", args)
     method, pm = _method_and_error(res)
@@ -201,7 +211,9 @@ def cmd_bem_vesicle(args):
             ("largest wall shear stress tau_w (= shear rate x eta)", out["wall_shear_max"],
              "eta U/R", method, "Poiseuille: 4"),
             ("rear / front curvature (neg. convex)", curv, "1/R", method, ""),
-            ("shape class", out["shape_class"] or None, "", method, ""),
+            ("shape class", out["shape_class"] or None, "", method, _other_branch(res)),
+            ("converged from", res.seed.split(" (")[0] or None, "", "",
+             res.seed[len(res.seed.split(" (")[0]):].strip(" ()")),
             ("steady residual max|u - V e_x|", res.residual, "U", method, ""),
             ("volume / area error", f"{res.volume_error:.1e} / {res.area_error:.1e}"
              if math.isfinite(res.volume_error) else None, "-", "panel quadrature", ""),
@@ -343,6 +355,14 @@ def _vesicle_options(p, sweep: bool) -> None:
                         f"{_range(VESICLE_MAX_MODES)} "
                         "(default 80, or for a long vesicle 40 more than the level where its "
                         "density is re-built, ~6 per tube radius of length)")
+    if not sweep:
+        p.add_argument("--branch", choices=("parachute", "bullet"), default=None,
+                       help="shape class to return where two steady states coexist (default: "
+                            "the state reached from the nearest stored shape; a second one "
+                            "found is reported)")
+        p.add_argument("--no-seed-bank", action="store_false", dest="seed_bank",
+                       help="start from the solver's own model seeds only (lubrication shape, "
+                            "continuation), not from the stored converged shapes")
     add_max_time_option(p)
 
 

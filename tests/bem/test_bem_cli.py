@@ -174,6 +174,7 @@ def test_plot_shape_labels_axes():
     (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--residual-tol", "-inf"],
      ("--residual-tol",)),
     (["bem", "vesicle", "--nu", "nan", "--lam", "1.0"], ("--nu", "nan")),
+    (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--branch", "round"], ("--branch", "round")),
     (["bem", "vesicle-sweep", "--nu", "0.9", "--lam", "0.5", "1.0", "1e6"], ("--lam", "100")),
     (["bem", "vesicle-sweep", "--nu", "0.9", "--lam", "0.5", "1.0", "3", "--ca-b", "0"],
      ("--ca-b",)),
@@ -226,3 +227,17 @@ def test_vesicle_sweep_table_has_one_labelled_row_per_point():
     lines = text.splitlines()
     assert "V/U" in lines[1] and "dp+ R0/(eta U)" in lines[1]
     assert "1.8" in lines[3] and "—" in lines[4] and "NOT CONVERGED" in lines[-1]
+
+
+def test_vesicle_json_names_its_start_and_the_other_branch(cli):
+    """The default solve says which start converged (a stored shape here), the starts that
+    failed before it, and the other branch where one exists (none at (0.9, 1.0))."""
+    code, out, err = cli("bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["converged"] and d["seed"].startswith("seed bank (")
+    assert d["failed_starts"] == [] and d["other_branch"] == {}
+    code, out, err = cli("bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--json",
+                         "--no-seed-bank")
+    assert code == 0, err
+    assert json.loads(out)["seed"] == "lubrication"

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from bem.results import VESICLE_PROFILE_COLUMNS, VesicleResult
-from bem.vesicle import _tension_max, solve_vesicle
+from bem.vesicle import solve_vesicle
+from bem.vesicle.operator import _tension_max
 from correlations.cli import main
 from lubrication.checks import CannotPassError, InvalidParameterError
 from lubrication.geometry import critical_confinement
@@ -57,7 +58,7 @@ def test_bad_input_is_rejected_before_any_work(kwargs, exc):
 
 
 def test_mode_convergence_rejects_bad_input():
-    from bem.vesicle import mode_convergence
+    from benchmarks.vesicle_modes import mode_convergence
     shaped = VesicleResult(nu=0.9, lam=1.0, lam_c=critical_confinement(0.9), ca_b=50.0,
                            status=Status.CONVERGED, modes=np.zeros(8))
     with pytest.raises(InvalidParameterError, match="result"):
@@ -167,7 +168,8 @@ def test_long_vesicle_wall_beside_the_body_is_converged(report):
     (1.0e-8), the residual (a maximum over the nodes, 2.7e-3 here) to 1e-7 absolute (3.4e-8),
     and the wall shear at the ends of the meshed tube to 1e-6 (8e-8; both within 1e-4 of
     Poiseuille, 4)."""
-    from bem.vesicle import WALL_BODY_LENGTH, VesicleOperator, vesicle_discretisation
+    from bem.vesicle import VesicleOperator, vesicle_discretisation
+    from bem.vesicle.operator import WALL_BODY_LENGTH
     seed = _stored_long_shape()
     curve = seed.curve()
     xr, xf = curve.extent()
@@ -247,7 +249,8 @@ def test_lubrication_seed_of_a_parachute_is_kept_with_the_bend_density():
 
 
 def test_continuation_rungs_halve_the_distance_to_lam_c():
-    from bem.vesicle import NEAR_CRITICAL, _rungs
+    from bem.vesicle import NEAR_CRITICAL
+    from bem.vesicle.ladder import _rungs
     assert NEAR_CRITICAL == 0.9
     assert _rungs(0.9) == [] and _rungs(0.95) == [0.9]
     assert _rungs(0.98) == [0.9, 0.95, 0.975]
@@ -260,14 +263,15 @@ def test_self_intersection_and_wall_contact_are_detected():
     radius R is rejected before any BEM work."""
     from bem.drop import DropDiscretisation
     from bem.shape import SpectralCurve
-    from bem.vesicle import VesicleOperator, _self_intersects
+    from bem.vesicle import VesicleOperator
+    from bem.vesicle.operator import self_intersects
     th = np.linspace(0.0, math.pi, 201)
-    assert not _self_intersects(-np.cos(th), np.sin(th))
+    assert not self_intersects(-np.cos(th), np.sin(th))
     # up the diagonal from the rear pole (-1, 0) to (1, 0.5), back along r = 0.2 to x = -0.5,
     # down to the axis: the return leg crosses the diagonal at x = -0.2
     x = np.concatenate([np.linspace(-1, 1, 50), np.linspace(1, -0.5, 50), [-0.5]])
     r = np.concatenate([np.linspace(0, 0.5, 50), np.full(50, 0.2), [0.0]])
-    assert _self_intersects(x, r)
+    assert self_intersects(x, r)
     touching = SpectralCurve.sphere(1.0, 8)
     op = VesicleOperator(0.99, 1.0, 50.0, DropDiscretisation(n_modes=8, n_panels=8), touching)
     with pytest.raises(InvalidParameterError, match="touching the wall"):
@@ -441,7 +445,7 @@ def test_mode_convergence_is_geometric_at_nu_0p6_lam_1p94(report):
     differences 0.22), gamma_max 999.60, 1007.30, 1009.85 (0.33), dp+R0 1778.211, 1778.395,
     1778.364 (0.17), residual 7.7e-4, 3.9e-4, 1.9e-4. Asserted: contraction below 0.5 per +8
     modes in V/U and gamma_max, a residual that falls by > 1.5x per level, dp+ settled to 1e-4."""
-    from bem.vesicle import mode_convergence
+    from benchmarks.vesicle_modes import mode_convergence
 
     rows = mode_convergence(_stored_long_shape(), (64, 72, 80))
     for r in rows:
@@ -493,12 +497,8 @@ def test_prolonged_jacobian_columns_match_difference_columns():
     level above the first) agrees with the difference Jacobian there, column by column."""
     from bem.newton import difference_jacobian
     from bem.shape import fit_curve
-    from bem.vesicle import (
-        VesicleOperator,
-        _prolonged_columns,
-        lubrication_seed,
-        vesicle_discretisation,
-    )
+    from bem.vesicle import VesicleOperator, lubrication_seed, vesicle_discretisation
+    from bem.vesicle.level import _prolonged_columns
 
     seed, _ = lubrication_seed(0.9, 1.0, 50.0, 24)
     ops, states, jacs = [], [], []
@@ -568,7 +568,8 @@ def test_concurrent_evaluations_equal_the_sequential_ones():
     ``lu_solve`` calls on the shared wall factorisation were wrong by O(1))."""
     import numba
 
-    from bem.vesicle import VesicleOperator, _residuals, lubrication_seed, vesicle_discretisation
+    from bem.vesicle import VesicleOperator, lubrication_seed, vesicle_discretisation
+    from bem.vesicle.level import _residuals
 
     seed, _ = lubrication_seed(0.9, 1.0, 50.0, 24)
     op = VesicleOperator(0.9, 1.0, 50.0, vesicle_discretisation(24), seed)

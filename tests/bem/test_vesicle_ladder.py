@@ -7,7 +7,8 @@ import math
 
 import pytest
 
-from bem.vesicle import ESTIMATE_SAFETY, MIN_CONTRACTION, _error_estimate, solve_vesicle
+from bem.vesicle import solve_vesicle
+from bem.vesicle.ladder import ESTIMATE_SAFETY, MIN_CONTRACTION, _error_estimate
 
 
 def _levels(values):

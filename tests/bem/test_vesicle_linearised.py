@@ -1,4 +1,4 @@
-"""The linearised far field of the difference-Jacobian points (:meth:`bem.vesicle.
+"""The linearised far field of the difference-Jacobian points (:meth:`bem.vesicle.operator.
 VesicleOperator.taylor`): its kernel derivatives, its residual against the exact fixed-load
 residual, and the Jacobian columns it gives against exact differences."""
 
@@ -110,12 +110,12 @@ def test_linearised_residual_differs_from_the_exact_one_at_second_order(state):
 
 def test_linearised_jacobian_columns_match_exact_differences(state):
     """The difference Jacobian from linearised points against the one from exact fixed-load
-    residuals (:data:`bem.vesicle.LINEARISED_POINTS` disabled): every column within 1e-4 of its
-    norm (the linearised points lose the exact cancellation of the second-order terms between
+    residuals (:data:`bem.vesicle.level.LINEARISED_POINTS` disabled): every column within 1e-4 of
+    its norm (the linearised points lose the exact cancellation of the second-order terms between
     the two residuals of a difference). Measured at the 88-mode lubrication seed of
     (0.6, 1.94): 1.8e-5 of the largest column at worst, median 5e-8 of a column's own norm,
     but 1.4e-3 of its own norm for the first column, whose norm is 1.3 % of the largest."""
-    import bem.vesicle as bv
+    from bem.vesicle import level as bv
     from bem.newton import difference_jacobian
 
     op, modes, st = state

@@ -2,12 +2,12 @@
 
 Run with ``python tests/benchmarks/default_cases.py [--cases 0.8:1.0,0.7:r0.95] [--json FILE]``
 (``r`` marks lam/lam_c instead of lam). For each case the default
-:func:`bem.vesicle.solve_vesicle` (Ca_B = 50) is run, then :func:`bem.vesicle.mode_convergence`
-solves its shape again at N + 8, N + 16, N + 24 modes (N the default's fine level) on the
-density built on the default shape; the last of those, extrapolated with its own contraction
-ratio, is the reference. The table gives, per output, the default's value, its error estimate,
-the true error (against the reference) and their ratio: honest means 1 <= ratio <= 10. Not a
-test: minutes per case (2 cores).
+:func:`bem.vesicle.solve_vesicle` (Ca_B = 50) is run, then ``mode_convergence``
+(``vesicle_modes.py``) solves its shape again at N + 8, N + 16, N + 24 modes (N the default's
+fine level) on the density built on the default shape; the last of those, extrapolated with its
+own contraction ratio, is the reference. The table gives, per output, the default's value, its
+error estimate, the true error (against the reference) and their ratio: honest means
+1 <= ratio <= 10. Not a test: minutes per case (2 cores).
 
 The seven cases are the default-option failures of the solver before its consistent ladder:
 (0.8, 1.0), (0.7, 1.2), (0.6, 1.5), (0.7, 1.5), (0.9, 0.98 lam_c), (0.7, 0.95 lam_c),
@@ -21,8 +21,9 @@ import math
 import time
 from pathlib import Path
 
-from bem.vesicle import MAX_MODES, mode_convergence, solve_vesicle
+from bem.vesicle import MAX_MODES, solve_vesicle
 from lubrication.io import provenance, write_json
+from vesicle_modes import mode_convergence
 
 SEVEN = "0.8:1.0,0.7:1.2,0.6:1.5,0.7:1.5,0.9:r0.98,0.7:r0.95,0.6:1.94"
 KEYS = ("V_over_U", "dp_plus_R0", "tension_max")

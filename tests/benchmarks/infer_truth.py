@@ -92,7 +92,8 @@ def retry_options(nu: float, lam_ratio: float) -> dict:
     """Options of the one retry (module docstring): the most modes and the default seeding path
     reversed (continuation above NEAR_CRITICAL, valley below), both defaults as
     :func:`bem.vesicle.solve_vesicle` derives them."""
-    from bem.vesicle import LONG_VESICLE, MAX_MODES, NEAR_CRITICAL, RUNG_MAX_LENGTH
+    from bem.vesicle import MAX_MODES, NEAR_CRITICAL
+    from bem.vesicle.ladder import LONG_VESICLE, RUNG_MAX_LENGTH
     from lubrication.geometry import critical_length
     ell = float(critical_length(nu)) * lam_ratio        # the solver's estimated length
     if lam_ratio > NEAR_CRITICAL:

@@ -65,7 +65,7 @@ _ORDER = ["assembly: membrane on itself", "assembly: membrane and wall on each o
           "Newton: directional update",
           "Newton: damped LM step", "Newton: Gauss-Newton promise",
           "level set-up (wall matrix + LU, breaks, area mode)", "seed (lubrication solve + fit)",
-          "shape fits (fit_curve)", "outputs (_outputs, profile, wall shear)"]
+          "shape fits (fit_curve)", "outputs (level_outputs, profile, wall shear)"]
 
 
 class Profiler:
@@ -150,7 +150,7 @@ class Profiler:
         self._set(owner, attr, wrapped)
 
     def level_marker(self, owner, attr):
-        """Record the shape modes of the level being solved (``_solve_level``'s disc)."""
+        """Record the shape modes of the level being solved (``solve_level``'s disc)."""
         fn = getattr(owner, attr)
 
         def wrapped(nu, lam, ca_b, disc, *args, **kwargs):
@@ -175,6 +175,7 @@ def install(prof: Profiler) -> None:
     import bem.newton
     import bem.shape
     import bem.vesicle
+    from bem.vesicle import ladder, level, operator, seeds
 
     def source(tx, tr, panels, **_):
         if (panels.r == 1.0).all():
@@ -184,14 +185,14 @@ def install(prof: Profiler) -> None:
         return "assembly: membrane on itself"
 
     V, D = bem.vesicle.VesicleOperator, bem.drop.DropOperator
-    prof.timer(bem.vesicle, "influence", None, classify=source)
-    prof.timer(bem.vesicle, "influence_pair", "assembly: membrane and wall on each other")
+    prof.timer(operator, "influence", None, classify=source)
+    prof.timer(operator, "influence_pair", "assembly: membrane and wall on each other")
     prof.timer(scipy.linalg, "lu_solve", "wall LU back-substitution")
     prof.timer(scipy.linalg, "lstsq", "tension/V least squares (lstsq)")
     prof.timer(V, "curve", "curve construction (closed curve, area secant)")
     prof.timer(D, "panels", "membrane panels (curve sampling)")
-    prof.timer(bem.vesicle, "bending_force", "bending force")
-    prof.timer(bem.vesicle, "tension_basis", "tension basis")
+    prof.timer(operator, "bending_force", "bending force")
+    prof.timer(operator, "tension_basis", "tension basis")
     prof.timer(V, "_flow", "operator products (A@Q, B@qw, ...)")
     prof.timer(V, "evaluate", "evaluate: rest", evaluation=True)
     prof.timer(V, "fixed_residual", "fixed-load point: rest", evaluation=True)
@@ -199,18 +200,19 @@ def install(prof: Profiler) -> None:
                evaluation=True)
     prof.timer(V, "taylor", "linearised Jacobian: expansion (far pairs, near blocks)")
     prof.timer(V, "linearised_finish", "linearised Jacobian: products, wall solve")
-    for owner in (bem.newton, bem.vesicle):        # the vesicle's prolonged Jacobians too
+    for owner in (bem.newton, level):              # the vesicle's prolonged Jacobians too
         prof.timer(owner, "difference_jacobian", "Newton: difference Jacobian")
     prof.timer(bem.newton, "_directional_update", "Newton: directional update")
     prof.timer(bem.newton, "_damped_step", "Newton: damped LM step")
     prof.timer(bem.newton, "_promised", "Newton: Gauss-Newton promise")
     prof.timer(V, "__init__", "level set-up (wall matrix + LU, breaks, area mode)")
-    prof.timer(bem.vesicle, "lubrication_seed", "seed (lubrication solve + fit)")
-    prof.timer(bem.vesicle, "fit_curve", "shape fits (fit_curve)")
-    for name in ("_outputs", "_profile"):
-        prof.timer(bem.vesicle, name, "outputs (_outputs, profile, wall shear)")
-    prof.timer(V, "wall_shear", "outputs (_outputs, profile, wall shear)")
-    prof.level_marker(bem.vesicle, "_solve_level")
+    prof.timer(ladder, "lubrication_seed", "seed (lubrication solve + fit)")
+    for owner in (seeds, level, ladder):            # every module of the solver that fits curves
+        prof.timer(owner, "fit_curve", "shape fits (fit_curve)")
+    for name in ("level_outputs", "membrane_profile"):
+        prof.timer(ladder, name, "outputs (level_outputs, profile, wall shear)")
+    prof.timer(V, "wall_shear", "outputs (level_outputs, profile, wall shear)")
+    prof.level_marker(ladder, "solve_level")
     S = bem.shape.SpectralCurve
     for attr in ("position", "curvatures", "_integrals", "volume_and_centroid", "area"):
         prof.tallied(S, attr, f"SpectralCurve.{attr}")
@@ -361,7 +363,7 @@ def profile_scaling(modes, repeats: int, newton: bool, nu=0.9, lam=1.0, ca_b=50.
         template = op.curve(seed.modes).modes.copy()
         z0 = op.free(template)
 
-        fun = level_function(op, template)                     # as bem.vesicle._solve_level
+        fun = level_function(op, template)                # as bem.vesicle.level.solve_level
         prof = Profiler()
         install(prof)
         blas = _solver_blas()
