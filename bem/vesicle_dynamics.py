@@ -64,6 +64,7 @@ from functools import cache
 import numpy as np
 
 from lubrication.checks import (
+    Deadline,
     InvalidParameterError,
     check_choice,
     check_positive,
@@ -271,7 +272,8 @@ def _explicit_step(op, flow: VesicleFlow) -> float:
 
 def relax_vesicle(op, modes0, t_end: float, *, dt: float | None = None, max_steps: int = 5000,
                   tol: float = 0.0, method: str = "implicit", jacobian_every: int = 25,
-                  growth: float = 1.5, regrow: int = 5, fd_step: float = 1e-6):
+                  growth: float = 1.5, regrow: int = 5, fd_step: float = 1e-6,
+                  max_time: float | None = None):
     r"""Integrate the vesicle shape in time, the tension from local inextensibility.
 
     Parameters
@@ -304,6 +306,9 @@ def relax_vesicle(op, modes0, t_end: float, *, dt: float | None = None, max_step
         After ``regrow`` accepted steps in a row h grows by 1.25, up to the largest step.
     fd_step : float
         Relative forward-difference step of the Jacobian.
+    max_time : float, optional
+        Wall-time budget [s] (:class:`lubrication.checks.Deadline`), tested between steps;
+        when spent the integration stops (``info["time_limit"]``). Default: no limit.
 
     Returns
     -------
@@ -315,7 +320,8 @@ def relax_vesicle(op, modes0, t_end: float, *, dt: float | None = None, max_step
         ``t`` [R/U], ``steps`` (accepted), ``rejected``, ``jacobians``, ``evaluations`` (BEM),
         ``dt`` (last step size) [R/U], ``max_un`` = max|u·n − V n_x| at the end [U], ``history``
         [(t, max|u·n − V n_x|, V)] at the start and after each accepted step, ``failure``
-        (empty, or why the shape became invalid, e.g. touching the wall).
+        (empty, or why the shape became invalid, e.g. touching the wall), ``time_limit``
+        (True if ``max_time`` ended the integration).
 
     Notes
     -----
@@ -337,6 +343,7 @@ def relax_vesicle(op, modes0, t_end: float, *, dt: float | None = None, max_step
     growth = float(check_range("growth", growth, 1.0, lo_open=True))
     regrow = int(check_range("regrow", regrow, 1))
     fd_step = float(check_range("fd_step", fd_step, 1e-12, 1e-2))
+    deadline = Deadline(max_time)
     if dt is not None:
         dt = float(check_positive("dt", dt))
     ev0 = op.evaluations
@@ -355,7 +362,8 @@ def relax_vesicle(op, modes0, t_end: float, *, dt: float | None = None, max_step
     history = [(t, peak, flow.V)]
     failure = ""
     J = None
-    while t < t_end - 1e-14 and steps < max_steps and not (tol > 0 and peak < tol):
+    while (t < t_end - 1e-14 and steps < max_steps and not (tol > 0 and peak < tol)
+           and not deadline.expired()):
         step = min(h, t_end - t)
         z = op.free(modes)
         try:
@@ -398,7 +406,7 @@ def relax_vesicle(op, modes0, t_end: float, *, dt: float | None = None, max_step
             h, streak, floor = min(1.25 * h, cap), 0, peak
     info = {"t": t, "steps": steps, "rejected": rejected, "jacobians": n_jac,
             "evaluations": op.evaluations - ev0, "dt": h, "max_un": peak, "history": history,
-            "failure": failure}
+            "failure": failure, "time_limit": deadline.expired()}
     log.info("relax_vesicle (%s): t=%.4g R/U, %d steps (%d rejected), %d Jacobians, "
              "max|u.n - V n_x| %.2e, V %.8f", method, t, steps, rejected, n_jac, peak, flow.V)
     return modes, flow, info

@@ -15,6 +15,19 @@ reasons of the starts that failed before it. A stored shape that cannot start he
 do not close at this point) is a failed start; the own seed or a given ``initial`` that cannot
 start raises.
 
+Where no start converges because they stall in non-steady least-squares minima (a steady
+residual above its tolerance), the two failed shapes with the smallest residual (or one and the
+nearest stored shape) are relaxed in time (:func:`bem.vesicle_dynamics.relax_vesicle`,
+:data:`RELAX_MODES` modes, at most :data:`RELAX_TIME` R/U each), and the ladder refines each
+relaxed shape in turn. The relaxation both reaches steady states the starts missed (at
+(0.6449, 0.281 λc, 43.9) without the seed bank: the spheroid's minimum, residual 7e-3, relaxed
+for 20 R/U and refined to the parachute the stored shape reaches directly, V/U equal to 2e-9)
+and is the evidence where none is found: the result then says what each relaxation did
+(max|u·n − V n_x| and V/U from start to end), NO_STEADY_STATE where both kept changing without
+settling, NOT_CONVERGED where one was still approaching a state the ladder did not reach. A
+start that failed on resolution only (UNRESOLVED: its residual passed) or a mode count fixed by
+the caller is reported as it is.
+
 A converged point is then probed for a second steady state (:func:`_other_branch`): the nearest
 stored shape of the other shape class within :data:`BRANCH_REACH`, solved in turn; where it
 converges to that class the point is bistable, and the result says so (``other_branch``, the
@@ -27,6 +40,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
+from collections.abc import Callable
 
 from lubrication.checks import Deadline, InvalidParameterError
 from lubrication.results import Status, leading_status
@@ -34,8 +48,9 @@ from lubrication.results import Status, leading_status
 from ..quadrature import DEFAULT_ORDER
 from ..results import VesicleResult
 from ..seed_bank import SHAPE_CLASSES, load_seed_bank
+from ..shape import fit_curve
 from ..threads import single_threaded_blas
-from .inputs import check_vesicle_inputs
+from .inputs import MAX_MODES, VesicleInputs, check_vesicle_inputs
 from .ladder import LadderOptions, solve_from
 from .seeds import NEAR_CRITICAL
 
@@ -51,36 +66,165 @@ BANK_STARTS = 2
 #: A stored shape of the other shape class within this distance is tried once the solve has
 #: converged: where it converges to that class too, the point is bistable.
 BRANCH_REACH = 1.5
+#: Modes of the coarse probe of the other branch (a single pair, PROBE_MODES and 2/3 of it):
+#: enough to tell a steady state of the other class (residual ~1e-5, 32 modes at
+#: (0.8, 0.3 λc, 35)) from a stored shape that leaves its class or stalls, at ~1 s, where a
+#: full ladder from a shape that does not converge climbs to its last level (10–50 s measured
+#: on the domain benchmark).
+PROBE_MODES = 32
+#: The time relaxation that follows when no start converged: modes, and the time [R/U] each
+#: of its two seeds is relaxed for at most (measured at (0.6449, 0.281 λc, 43.9) from a
+#: spheroid, 16 modes: 290 BEM evaluations, 18 s on 2 cores, for 10 R/U, the speed still
+#: drifting by 1e-2 per R/U towards the parachute's).
+RELAX_MODES = 16
+RELAX_TIME = 20.0
+#: A relaxation is still approaching a steady state where max|u·n − V n_x| at its end is
+#: below this fraction of its largest value over the second half of the run (it decays, as
+#: towards the parachute of (0.6449, 0.281 λc, 43.9): 1.7e-1 -> 9.2e-2 over 20 R/U).
+RELAX_APPROACH = 0.8
 
 
-def _starts(nu: float, lam: float, ratio: float, ca_b: float, branch: str | None,
-            seed_bank: bool) -> list:
-    """The starts of :func:`~bem.vesicle.solve_vesicle` in the order tried: (label, make the initial
-    shape) pairs, None the solver's own seed."""
-    own = [("own", lambda: None)]
+@dataclasses.dataclass(frozen=True)
+class Start:
+    """One start of the pipeline: its ``label``, ``make()`` -> the initial shape (None: the
+    solver's own seed), the ``inputs`` its ladder runs with, and ``own`` (a start whose failure
+    to begin is the caller's error, not a failed start)."""
+
+    label: str
+    make: Callable
+    inputs: VesicleInputs
+    own: bool = False
+
+
+def _starts(case: VesicleInputs, initial, branch: str | None, seed_bank: bool) -> list[Start]:
+    """The starts of :func:`~bem.vesicle.solve_vesicle` in the order tried (module docstring).
+    A stored shape's ladder may climb to MAX_MODES where the case leaves ``max_modes`` to the
+    solver: its shape is on a steady branch, so an estimate still above the tolerance at the
+    own seed's default cap (80) is resolution, not a spurious minimum (measured at
+    (0.6267, 0.7517 λc, Ca_B 439): unresolved at 80 modes, V/U estimate 1.1e-4; converged at
+    88, 46 s)."""
+    if initial is not None:
+        return [Start("initial", lambda: initial, case, own=True)]
+    own = [Start("own", lambda: None, case, own=True)]
     if not seed_bank:
         return own
-    bank = [(seed.label(), lambda seed=seed: seed.curve(lam))
-            for seed in load_seed_bank().nearest(nu, ratio, ca_b, k=BANK_STARTS,
+    deeper = (dataclasses.replace(case, max_modes=MAX_MODES)
+              if case.max_modes is None and case.n_modes is None else case)
+    ratio = case.lam / case.lam_c
+    bank = [Start(seed.label(), lambda seed=seed: seed.curve(case.lam), deeper)
+            for seed in load_seed_bank().nearest(case.nu, ratio, case.ca_b, k=BANK_STARTS,
                                                  shape_class=branch, within=BANK_REACH)]
     return own + bank if ratio > NEAR_CRITICAL else bank + own
 
 
-def _other_branch(nu, lam, ratio, ca_b, res: VesicleResult, solve) -> dict:
+def _other_branch(case: VesicleInputs, res: VesicleResult, solve) -> dict:
     """The steady state of the other shape class at this point, if a stored shape of that
-    class within BRANCH_REACH converges to it: its class and outputs, else {}."""
+    class within BRANCH_REACH converges to it: its class and outputs, else {}. The stored shape
+    is first solved as a single coarse pair (:data:`PROBE_MODES`, loose error tolerance, the
+    case's residual tolerance), which decides whether it stays a steady state of its class; only
+    then is it refined by the ladder to the case's tolerances."""
     other = "bullet" if res.shape_class == "parachute" else "parachute"
-    near = load_seed_bank().nearest(nu, ratio, ca_b, shape_class=other, within=BRANCH_REACH)
+    near = load_seed_bank().nearest(case.nu, case.lam / case.lam_c, case.ca_b,
+                                    shape_class=other, within=BRANCH_REACH)
     if not near:
         return {}
     try:
-        alt = solve(near[0].curve(lam))
+        probe = solve(near[0].curve(case.lam), dataclasses.replace(
+            case, n_modes=PROBE_MODES, max_modes=None, tol=0.5, tension_tol=0.5))
     except InvalidParameterError:
         return {}
+    if not (probe.success and probe.shape_class == other):
+        return {}
+    alt = solve(probe, case)
     if not (alt.success and alt.shape_class == other):
         return {}
     return {"shape_class": other, "seed": near[0].label(),
             **{k: getattr(alt, k) for k in ("V_over_U", "dp_plus_R0", "ell", "film_min")}}
+
+
+def _relax(case: VesicleInputs, label: str, curve, budget: float | None) -> dict:
+    """Relax ``curve`` in time (:func:`bem.vesicle_dynamics.relax_vesicle`, RELAX_MODES modes on
+    the curve's density) for at most RELAX_TIME R/U or until max|u·n − V n_x| < the case's
+    residual tolerance. Returns the evidence: ``label``, the final ``curve`` (None if the membrane
+    became invalid), time ``t`` [R/U], ``max_un`` and ``V`` at the start and the end,
+    ``approaching`` (:data:`RELAX_APPROACH`), ``failure``, ``evaluations``."""
+    # in the function: bem.vesicle_dynamics imports bem.vesicle (a cycle at module level)
+    from ..vesicle_dynamics import relax_vesicle
+    from .operator import VesicleOperator, vesicle_discretisation
+    reference = fit_curve(curve.sample, 0.0, 1.0, RELAX_MODES, density=curve.density)
+    op = VesicleOperator(case.nu, case.lam, case.ca_b, vesicle_discretisation(RELAX_MODES),
+                         reference)
+    modes, flow, info = relax_vesicle(op, reference.modes, RELAX_TIME, tol=case.residual_tol,
+                                      max_time=budget)
+    history = info["history"]
+    (_, un0, v0), (t, un1, v1) = history[0], history[-1]
+    half = [un for tt, un, _ in history if tt >= 0.5 * t]
+    return {"label": label, "curve": None if info["failure"] else flow.curve, "t": t,
+            "approaching": bool(un1 < RELAX_APPROACH * max(half, default=un1)),
+            "max_un": (un0, un1), "V": (v0, v1), "failure": info["failure"],
+            "evaluations": info["evaluations"]}
+
+
+def _evidence(r: dict) -> str:
+    """One clause of the diagnosis: what a relaxation did."""
+    if r["failure"]:
+        return f"from {r['label']}: {r['failure']}"
+    return (f"from {r['label']}: after {r['t']:.3g} R/U max|u.n - V n_x| {r['max_un'][0]:.1e} -> "
+            f"{r['max_un'][1]:.1e}, V/U {r['V'][0]:.5g} -> {r['V'][1]:.5g}")
+
+
+def _first_converged(starts: list[Start], solve, branch: str | None, deadline) -> tuple:
+    """Try the starts in turn. Returns (the first converged result of the asked ``branch`` or
+    None, the label of its start, the failed starts as (label, reason, result or None))."""
+    failed = []
+    for start in starts:
+        if deadline.expired():
+            failed.append((start.label, f"not tried, {deadline.message()}", None))
+            break
+        try:
+            res = solve(start.make(), start.inputs)
+        except InvalidParameterError as exc:
+            if start.own:
+                raise
+            failed.append((start.label, f"cannot start ({exc})", None))  # modes do not close
+            continue
+        if res.success and branch not in (None, res.shape_class):
+            failed.append((start.label, f"converged to a {res.shape_class}, not a {branch}",
+                           None))
+        elif res.success:
+            return res, (res.seed if start.own else start.label), failed
+        else:
+            failed.append((start.label, res.message, res))
+    return None, "", failed
+
+
+def _relaxation_seeds(case: VesicleInputs, failed: list, seed_bank: bool) -> list:
+    """Two seeds of the time relaxation, as (label, curve): the final shapes of the two failed
+    starts with the smallest steady residual, or, with one only, it and the nearest stored
+    shape (with ``seed_bank``)."""
+    ranked = sorted(((r.residual, lab, r) for lab, _, r in failed
+                     if r is not None and r.modes.size), key=lambda x: x[0])
+    seeds = [(f"the last shape of start {lab}", r.curve()) for _, lab, r in ranked[:2]]
+    if len(seeds) < 2 and seed_bank:
+        near = load_seed_bank().nearest(case.nu, case.lam / case.lam_c, case.ca_b)
+        seeds += [(s.label(), s.curve(case.lam)) for s in near]
+    return seeds[:2]
+
+
+def _diagnosis(evidence: list[dict], deadline) -> tuple[Status, str]:
+    """Status and text of a point where neither the starts nor the relaxation converged."""
+    said = "; ".join(_evidence(r) for r in evidence)
+    if deadline.expired():
+        return Status.TIME_LIMIT, f"{deadline.message()} in the time relaxation ({said})"
+    if evidence and all(r["failure"] for r in evidence):
+        return Status.NO_STEADY_STATE, f"no steady state: relaxed in time, the membrane {said}"
+    if any(r["curve"] is not None and r["approaching"] for r in evidence):
+        return (Status.NOT_CONVERGED, "not converged: a relaxation in time was still "
+                f"approaching a steady state, which the ladder from its shape did not reach "
+                f"({said})")
+    return (Status.NO_STEADY_STATE, f"no steady state reached: relaxed in time from "
+            f"{len(evidence)} seeds for up to {RELAX_TIME:g} R/U each, the shape still "
+            f"changing and not settling ({said})")
 
 
 @single_threaded_blas()      # small dense products between numba loops (bem.threads)
@@ -102,7 +246,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     the mode ladder with its error estimate, and the first that converges is returned. A
     converged point is then probed for a second steady state: the nearest stored shape of the
     other shape class within ``BRANCH_REACH``, solved in turn; where it converges to that class
-    the point is bistable, and the result says so (``other_branch``, the message).
+    the point is bistable, and the result says so (``other_branch``, the message). Where no
+    start converges, their shapes are relaxed in time and refined again, and what the
+    relaxations did is the diagnosis of a point that still fails (module docstring).
 
     Parameters
     ----------
@@ -210,53 +356,59 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     options = LadderOptions(order=order, xtol=xtol, density=density, continuation=continuation,
                             valley=valley)
 
-    def solve(start):
-        return solve_from(case, start, options, deadline.remaining())
+    def solve(start, inputs=case):
+        return solve_from(inputs, start, options, deadline.remaining())
 
     def done(res: VesicleResult, **changes) -> VesicleResult:
         timings = {**res.timings, "total_s": time.perf_counter() - t_start}
         return dataclasses.replace(res, timings=timings, **changes)
 
-    ratio = lam / lam_c
-    starts = ([("initial", lambda: initial)] if initial is not None
-              else _starts(nu, lam, ratio, ca_b, branch, seed_bank))
-    failures, found, res = [], [], None
-    for label, make in starts:
-        if deadline.expired():
-            failures.append(f"{label}: not tried, {deadline.message()}")
-            found.append(Status.TIME_LIMIT)
-            break
-        try:
-            res = solve(make())
-        except InvalidParameterError as exc:
-            if label in ("own", "initial"):
-                raise
-            failures.append(f"{label}: cannot start ({exc})")   # its modes do not close here
-            found.append(Status.REJECTED_START)
+    starts = _starts(case, initial, branch, seed_bank)
+    res, label, failed = _first_converged(starts, solve, branch, deadline)
+    failures = [f"{lab}: {why}" for lab, why, _ in failed]
+    if res is not None:
+        other = ({} if branch or initial is not None or not seed_bank or deadline.expired()
+                 else _other_branch(case, res, solve))
+        message = res.message
+        if other:
+            message += (f"; bistable: a {other['shape_class']} steady state also exists "
+                        f"here (V/U {other['V_over_U']:.6g}), ask for it with "
+                        f"branch={other['shape_class']!r}")
+        return done(res, seed=label, other_branch=other, message=message,
+                    failed_starts=failures)
+    best = min((r for _, _, r in failed if r is not None), default=None,
+               key=lambda r: r.residual if r.residual == r.residual else float("inf"))
+    # the time relaxation is for starts stalled in non-steady minima; a start whose residual
+    # passed but whose estimate did not (UNRESOLVED) or a mode count fixed by the caller is a
+    # question of resolution, which relaxing at RELAX_MODES cannot answer
+    if (initial is not None or case.n_modes is not None or deadline.expired() or best is None
+            or best.status is Status.UNRESOLVED):
+        status = leading_status([r.status if r is not None else Status.REJECTED_START
+                                 for _, _, r in failed]) if failed else Status.REJECTED_START
+        message = "; ".join(failures) if failures else "no start"
+        log.warning("solve_vesicle(nu=%g, lam=%g): %s", nu, lam, message)
+        if best is None:
+            return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=status,
+                                 message=message, tol=tol, residual_tol=residual_tol,
+                                 timings={"total_s": time.perf_counter() - t_start})
+        return done(best, status=status, message=message, failed_starts=failures)
+    # no start converged: relaxation in time from two seeds, which either reaches a steady
+    # state (the ladder then refines it) or is the evidence that none was found
+    evidence = []
+    for seed_label, curve in _relaxation_seeds(case, failed, seed_bank):
+        r = _relax(case, seed_label, curve, deadline.remaining())
+        evidence.append(r)
+        if r["curve"] is None or deadline.expired():
             continue
-        if res.success and branch not in (None, res.shape_class):
-            failures.append(f"{label}: converged to a {res.shape_class}, not a {branch}")
-            found.append(Status.NOT_CONVERGED)
-            continue
-        if res.success:
-            seed = res.seed if label in ("own", "initial") else label
-            other = {} if (branch or initial is not None or not seed_bank
-                           or deadline.expired()) else \
-                _other_branch(nu, lam, ratio, ca_b, res, solve)
-            message = res.message
-            if other:
-                message += (f"; bistable: a {other['shape_class']} steady state also exists "
-                            f"here (V/U {other['V_over_U']:.6g}), ask for it with "
-                            f"branch={other['shape_class']!r}")
-            return done(res, seed=seed, other_branch=other, message=message,
-                        failed_starts=failures)
-        failures.append(f"{label}: {res.message}")
-        found.append(res.status)
-    status = leading_status(found) if found else Status.REJECTED_START
-    message = "; ".join(failures) if failures else "no start"
+        res = solve(r["curve"])
+        if res.success and branch in (None, res.shape_class):
+            return done(res, seed=f"time relaxation ({_evidence(r)})", failed_starts=failures)
+        failures.append(f"time relaxation from {seed_label}: {res.message}")
+    status, diagnosis = _diagnosis(evidence, deadline)
+    message = diagnosis + "; the starts: " + "; ".join(failures)
     log.warning("solve_vesicle(nu=%g, lam=%g): %s", nu, lam, message)
-    if res is None:
-        return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=status,
-                             message=message, tol=tol, residual_tol=residual_tol,
-                             timings={"total_s": time.perf_counter() - t_start})
-    return done(res, status=status, message=message, failed_starts=failures)
+    iterations = {**best.iterations, **{f"relaxation from {r['label']}": {
+        k: r[k] for k in ("t", "max_un", "V", "approaching", "failure", "evaluations")}
+        for r in evidence}}
+    return done(best, status=status, message=message, failed_starts=failures,
+                iterations=iterations)
