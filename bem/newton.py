@@ -26,7 +26,7 @@ second step is extrapolated along the valley (parallel tangents).
 Independent points: the points of a difference Jacobian and of a directional update do not
 depend on each other; if ``fun`` has an attribute ``many`` (a function of a list of points
 returning their F, None where the shape is rejected) they are handed to it together, e.g. to
-be evaluated concurrently (:func:`bem.vesicle._residuals`). The result must not depend on
+be evaluated concurrently (:func:`bem.vesicle.level._residuals`). The result must not depend on
 the order of evaluation.
 
 Separable problems: if ``fun`` has an attribute ``fixed`` (a function of the payload at z

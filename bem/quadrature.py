@@ -87,7 +87,7 @@ _ON_THIS_THREAD = threading.local()
 def serial_assembly():
     """Assemble every block on the calling thread (the serial numba kernels, which release the
     GIL) for the duration of a ``with`` block: for threads that each run whole BEM evaluations
-    (:func:`bem.vesicle._solve_level` evaluates the difference-Jacobian columns two at a time);
+    (:func:`bem.vesicle.level.solve_level` evaluates the difference-Jacobian columns two at a time);
     numba's default threading layer must not be entered from two threads at once."""
     before = getattr(_ON_THIS_THREAD, "serial", False)
     _ON_THIS_THREAD.serial = True

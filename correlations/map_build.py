@@ -444,7 +444,7 @@ def _init_worker(parent: int, lock_fd: int | None = None) -> None:
 
 def _share_cores(threads: int | None) -> None:
     """Run this thread's BEM work on ``threads`` numba threads (the assembly and the concurrent
-    Jacobian points of :func:`bem.vesicle._residuals`; numba's setting is per thread), so that
+    Jacobian points of :func:`bem.vesicle.level._residuals`; numba's setting is per thread), so that
     the parallel workers of a build do not ask for more threads than the cores. Measured with
     ``bench_map_build.py`` (2 cores, 8 BEM points, one run each): 2 pool workers of 2 threads
     13.3 s, of 1 thread 12.3 s; a Dask LocalCluster of 2 processes 15.1 s and 13.6 s."""

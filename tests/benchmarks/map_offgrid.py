@@ -6,10 +6,9 @@ The points are a fixed pseudo-random sample (seed 2026) of (ν, λ/λc, Ca_B) in
 box, ν in [0.6, 0.98], λ/λc in [0.2, 0.95], log-uniform Ca_B in [5, 500] (or the Ca_B values
 given with ``--ca-b``), none on a node of the map's grid (each coordinate at least 0.2 of a
 grid step from the nearest node; a finer grid thus draws new points where old ones now lie
-near a node). Each is solved directly by the BEM at its default options (Ca_B given); where
-that does not converge (cold seeds can end in non-steady minima at low ν), a second solve starts
-from the nearest stored shape of the map's build folder, as the map's own points were started
-from their neighbours. It is compared with :func:`query_map` at the same point.
+near a node). Each is solved directly by the BEM at its default options (Ca_B given; the
+default solve starts from the nearest stored shapes of the seed bank, :mod:`bem.seed_bank`) and
+compared with :func:`query_map` at the same point.
 
 Acceptance targets (relative, |map − direct| / |direct|): V/U 0.2 %, Δp⁺ and ℓ 2 %, minimum
 film 5 %; the reported error bar ``error`` should cover |map − direct| at ≥ 90 % of points.
@@ -36,10 +35,9 @@ import time
 from pathlib import Path
 
 from bem.vesicle import solve_vesicle
-from correlations.solution_map import load_map, query_map, read_points
+from correlations.solution_map import load_map, query_map
 from lubrication.io import write_json
 
-BUILD = Path(__file__).resolve().parents[2] / "correlations" / "data" / "solution_map_build"
 TARGETS = {"V_over_U": 2e-3, "dp_plus_R0": 2e-2, "ell": 2e-2, "film_min": 5e-2}
 COVERAGE_TARGET = 0.9
 
@@ -69,33 +67,13 @@ def sample(n: int, grid: dict, ca_b: list[float] | None = None, seed: int = 2026
     return out
 
 
-def _nearest_shape(nu: float, r: float, ca: float, points: list[dict]):
-    """The converged stored BEM shape nearest to (ν, λ/λc, Ca_B) (distance in ν/0.05,
-    λ/λc/0.1, log10 Ca_B), rescaled to the volume of the point: a second start."""
-    from bem.shape import SpectralCurve
-    from lubrication.geometry import critical_confinement
-    best = min((p for p in points if p["method"] == "bem" and p["success"] and p.get("shape")),
-               key=lambda p: ((p["nu"] - nu) / 0.05) ** 2 + ((p["lam_ratio"] - r) / 0.1) ** 2
-               + math.log10(p["ca_b"] / ca) ** 2)
-    lam = r * float(critical_confinement(nu))
-    return best, SpectralCurve.closed(best["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
-                                      density=best["shape"]["density"])
-
-
-def _direct(nu: float, r: float, ca: float, points: list[dict]) -> dict:
-    """Default solve; if it does not converge, a second solve started from the nearest stored
-    shape (the default's cold seeds can end in a non-steady minimum at low ν)."""
+def _direct(nu: float, r: float, ca: float) -> dict:
+    """The default solve at one point."""
     t0 = time.perf_counter()
-    res, seed = solve_vesicle(nu, lam_ratio=r, ca_b=ca), "default"
-    first = None
-    if not res.success and points:
-        first = res.message
-        near, curve = _nearest_shape(nu, r, ca, points)
-        res = solve_vesicle(nu, lam_ratio=r, ca_b=ca, initial=curve)
-        seed = f"stored shape at ({near['nu']:g}, {near['lam_ratio']:g}, {near['ca_b']:g})"
+    res = solve_vesicle(nu, lam_ratio=r, ca_b=ca)
     d = res.to_dict(shape=False)
-    return {"success": bool(res.success), "message": res.message, "seed": seed,
-            "default_message": first, "seconds": round(time.perf_counter() - t0, 1),
+    return {"success": bool(res.success), "message": res.message, "seed": res.seed,
+            "seconds": round(time.perf_counter() - t0, 1),
             "bie_solves": res.bie_solves, "shape_class": d.get("shape_class"),
             **{q: d.get(q) for q in TARGETS}}
 
@@ -135,8 +113,6 @@ def main(argv=None) -> int:
     ap.add_argument("--map", help="packed map file (default: the shipped map)")
     ap.add_argument("--json", default="docs/data/map_offgrid.json", help="results file")
     ap.add_argument("--points", type=int, default=32, help="number of points (default 32)")
-    ap.add_argument("--build", default=str(BUILD), help="map build folder whose stored shapes "
-                    "start a second solve where the default one does not converge")
     ap.add_argument("--ca-b", type=float, nargs="+", help="Ca_B values to sample from "
                     "(default: log-uniform in [5, 500])")
     args = ap.parse_args(argv)
@@ -149,14 +125,13 @@ def main(argv=None) -> int:
     source = str(args.map or "shipped map")
     old = json.loads(out_path.read_text()) if out_path.exists() else {}
     done = {tuple(p["point"]): p for p in old.get("points", [])}
-    stored = read_points(args.build) if Path(args.build).is_dir() else []
     rows = []
     print(f"{'nu':>6} {'r':>6} {'Ca_B':>7} {'s':>5}  " + "  ".join(
         f"{q:>10} {'rel err':>8} {'bar':>8}" for q in TARGETS), flush=True)
     for point in sample(args.points, m.grid, args.ca_b):
         row = done.get(point)
         if row is None or (not row["direct"]["success"] and "seed" not in row["direct"]):
-            row = {"point": list(point), "direct": _direct(*point, stored)}
+            row = {"point": list(point), "direct": _direct(*point)}
         query = query_map(*point, map=m)
         row["map"] = {q: {"value": query.quantities[q].value, "error": query.quantities[q].error,
                           "note": query.quantities[q].note} for q in TARGETS}

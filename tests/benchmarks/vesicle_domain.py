@@ -14,8 +14,9 @@ Reported: the converged fraction, the time quantiles (median, 95th percentile, m
 failure with its message, the bistable points found, and per quantity the coverage of the error
 bar and the worst relative error. Results go point by point to the JSON file (atomic writes;
 default ``docs/data/vesicle_domain.json`` for the default seed, ``vesicle_domain_seed<S>.json``
-for another), with the solver's commit; a rerun keeps the points already solved by the same
-commit and options. Targets (the solver's acceptance): converged ≥ 98 %, median ≤ 10 s, 95th
+for another), with the solver's commit (the last commit that changed bem/ or lubrication/); a
+rerun keeps the points already solved by the same solver commit, unless that code has
+uncommitted changes. Targets (the solver's acceptance): converged ≥ 98 %, median ≤ 10 s, 95th
 percentile ≤ 60 s, coverage ≥ 90 %. Not a test (minutes to an hour on 2 cores);
 tests/bem/test_vesicle_domain.py runs a few points at a loose tolerance.
 """
@@ -27,6 +28,7 @@ import json
 import math
 import random
 import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -67,6 +69,20 @@ def solve_point(nu: float, r: float, ca: float, **options) -> dict:
                     for k in QUANTITIES}}
 
 
+def solver_commit() -> str | None:
+    """The last commit that changed the solver's code (bem/, lubrication/), or None when that
+    code has uncommitted changes or git is not available."""
+    root = Path(__file__).resolve().parents[2]
+    try:
+        dirty = subprocess.run(["git", "status", "--porcelain", "--", "bem", "lubrication"],
+                               cwd=root, capture_output=True, text=True, check=True).stdout
+        last = subprocess.run(["git", "log", "-1", "--format=%H", "--", "bem", "lubrication"],
+                              cwd=root, capture_output=True, text=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return None if dirty.strip() else last.strip() or None
+
+
 def quantile(xs: list[float], p: float) -> float:
     """The p-quantile of ``xs`` (linear between order statistics)."""
     xs = sorted(xs)
@@ -87,6 +103,7 @@ def summarise(rows: list[dict]) -> dict:
            "bistable": [r["point"] for r in ok if r["other_branch"]],
            "failures": [{"point": r["point"], "status": r["status"], "message": r["message"]}
                         for r in rows if not r["success"]], "estimate": {}}
+    out["bistable_points"], out["failed_points"] = len(out["bistable"]), len(out["failures"])
     for k in QUANTITIES:
         pairs = [(r["map"][k], r["direct"][k]) for r in ok
                  if r["map"][k]["value"] is not None and r["direct"][k] is not None]
@@ -135,11 +152,11 @@ def main(argv=None) -> int:
     if not path.parent.is_dir():
         ap.error(f"--json: folder {path.parent} does not exist")
     load_map()
-    commit = provenance().get("git_commit")
+    commit = solver_commit()
     old = {}
     if path.exists():
         data = json.loads(path.read_text())
-        if data.get("git_commit") == commit:
+        if commit is not None and data.get("git_commit") == commit:
             old = {tuple(r["point"]): r for r in data.get("rows", [])}
     rows = []
     print(f"{'nu':>6} {'r':>6} {'Ca_B':>7} {'s':>6} {'status':>14} {'class':>9}  seed", flush=True)
