@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 import time
 from collections.abc import Callable
 
@@ -151,11 +152,16 @@ def _relax(case: VesicleInputs, label: str, curve, budget: float | None) -> dict
     # in the function: bem.vesicle_dynamics imports bem.vesicle (a cycle at module level)
     from ..vesicle_dynamics import relax_vesicle
     from .operator import VesicleOperator, vesicle_discretisation
-    reference = fit_curve(curve.sample, 0.0, 1.0, RELAX_MODES, density=curve.density)
-    op = VesicleOperator(case.nu, case.lam, case.ca_b, vesicle_discretisation(RELAX_MODES),
-                         reference)
-    modes, flow, info = relax_vesicle(op, reference.modes, RELAX_TIME, tol=case.residual_tol,
-                                      max_time=budget)
+    try:
+        reference = fit_curve(curve.sample, 0.0, 1.0, RELAX_MODES, density=curve.density)
+        op = VesicleOperator(case.nu, case.lam, case.ca_b,
+                             vesicle_discretisation(RELAX_MODES), reference)
+        modes, flow, info = relax_vesicle(op, reference.modes, RELAX_TIME,
+                                          tol=case.residual_tol, max_time=budget)
+    except InvalidParameterError as exc:          # the shape cannot start a relaxation
+        return {"label": label, "curve": None, "t": 0.0, "approaching": False,
+                "max_un": (math.nan, math.nan), "V": (math.nan, math.nan),
+                "failure": f"cannot be relaxed ({exc})", "evaluations": 0}
     history = info["history"]
     (_, un0, v0), (t, un1, v1) = history[0], history[-1]
     half = [un for tt, un, _ in history if tt >= 0.5 * t]
@@ -202,9 +208,9 @@ def _relaxation_seeds(case: VesicleInputs, failed: list, seed_bank: bool) -> lis
     """Two seeds of the time relaxation, as (label, curve): the final shapes of the two failed
     starts with the smallest steady residual, or, with one only, it and the nearest stored
     shape (with ``seed_bank``)."""
-    ranked = sorted(((r.residual, lab, r) for lab, _, r in failed
-                     if r is not None and r.modes.size), key=lambda x: x[0])
-    seeds = [(f"the last shape of start {lab}", r.curve()) for _, lab, r in ranked[:2]]
+    ranked = sorted(((lab, r) for lab, _, r in failed if r is not None and r.modes.size),
+                    key=lambda x: x[1].residual if math.isfinite(x[1].residual) else math.inf)
+    seeds = [(f"the last shape of start {lab}", r.curve()) for lab, r in ranked[:2]]
     if len(seeds) < 2 and seed_bank:
         near = load_seed_bank().nearest(case.nu, case.lam / case.lam_c, case.ca_b)
         seeds += [(s.label(), s.curve(case.lam)) for s in near]
@@ -377,7 +383,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         return done(res, seed=label, other_branch=other, message=message,
                     failed_starts=failures)
     best = min((r for _, _, r in failed if r is not None), default=None,
-               key=lambda r: r.residual if r.residual == r.residual else float("inf"))
+               key=lambda r: r.residual if math.isfinite(r.residual) else math.inf)
     # the time relaxation is for starts stalled in non-steady minima; a start whose residual
     # passed but whose estimate did not (UNRESOLVED) or a mode count fixed by the caller is a
     # question of resolution, which relaxing at RELAX_MODES cannot answer
