@@ -53,6 +53,7 @@ from ..shape import fit_curve
 from ..threads import single_threaded_blas
 from .inputs import MAX_MODES, VesicleInputs, check_vesicle_inputs
 from .ladder import LadderOptions, solve_from
+from .operator import VesicleOperator, vesicle_discretisation
 from .seeds import NEAR_CRITICAL
 
 __all__ = ["BANK_REACH", "BANK_STARTS", "BRANCH_REACH", "solve_vesicle"]
@@ -149,9 +150,7 @@ def _relax(case: VesicleInputs, label: str, curve, budget: float | None) -> dict
     residual tolerance. Returns the evidence: ``label``, the final ``curve`` (None if the membrane
     became invalid), time ``t`` [R/U], ``max_un`` and ``V`` at the start and the end,
     ``approaching`` (:data:`RELAX_APPROACH`), ``failure``, ``evaluations``."""
-    # in the function: bem.vesicle_dynamics imports bem.vesicle (a cycle at module level)
-    from ..vesicle_dynamics import relax_vesicle
-    from .operator import VesicleOperator, vesicle_discretisation
+    from ..vesicle_dynamics import relax_vesicle  # lazy: it imports bem.vesicle (a cycle)
     try:
         reference = fit_curve(curve.sample, 0.0, 1.0, RELAX_MODES, density=curve.density)
         op = VesicleOperator(case.nu, case.lam, case.ca_b,
