@@ -1,6 +1,10 @@
 r"""The mode ladder of one start: its seed, continuation near lam_c, the levels 16, 24, ...
 and the error estimate that stops them (:func:`solve_from`).
 
+:func:`solve_from` takes five steps: the plan of the start (:func:`plan_ladder`, a
+:class:`LadderPlan`: regime, density, the levels), the continuation rungs near lam_c, the seed,
+the climb through the levels, and the result with every problem named.
+
 Regime defaults, from λ/λc and the estimated length ℓ ≈ ℓc λ/λc [R] (Chen et al. 2020 eq. sL):
 
 * density (:mod:`bem.vesicle.seeds`): "film" from λ/λc =
@@ -21,24 +25,25 @@ Ladder and error estimate (automatic refinement, ``n_modes`` None):
 
 * the density is built on a BEM minimum and then kept: on the seed if it is one (``initial``
   a VesicleResult, or the continuation rungs), else on the shape of a first level solved
-  from the lubrication seed (16 modes; for a long vesicle the level ``first`` ≈ 6 modes per R
-  of estimated length minus 16, reached through carrier levels 16, 32, ... of one difference
-  Jacobian each, which keep the cold start on the physical branch: started at 43–64 modes it
-  drifts to a closing film). A density built on the lubrication shape misses the BEM shape's
-  rear film neck (at (0.6, 1.94), 64 modes: γ_max 931 instead of the mode-converged 1011).
-  A level on that first re-built density still resolves the neck only in part, so a long
-  vesicle near lam_c re-builds it once more, on the next level's shape
-  (:data:`NEAR_CRITICAL_REBUILDS`; at (0.6, 1.94) the consistent ladder then contracts by
-  0.26–0.38 per +8 modes instead of ~0.4 and converges at 88 or 96 modes).
-* the levels on that density, +8 modes each, form a consistent ladder: each starts from the
-  previous minimum with its Jacobian prolonged (:mod:`bem.vesicle.level`), and their
-  successive differences contract geometrically (spectral convergence; ratios 0.02–0.3 per 8
-  modes measured at (0.9, 1.0), (0.8, 1.0), (0.7, 1.5), (0.6, 1.5), (0.6, 1.94)).
+  from the lubrication seed (:data:`FIRST_LEVEL` = 16 modes; for a long vesicle the level
+  ``first`` ≈ :data:`LONG_MODES_PER_LENGTH` = 6 modes per R of estimated length minus 16,
+  reached through carrier levels 16, 32, ... of one difference Jacobian each, which keep the
+  cold start on the physical branch: started at 43–64 modes it drifts to a closing film). A
+  density built on the lubrication shape misses the BEM shape's rear film neck (at (0.6,
+  1.94), 64 modes: γ_max 931 instead of the mode-converged 1011). A level on that first
+  re-built density still resolves the neck only in part, so a long vesicle near lam_c re-builds
+  it once more, on the next level's shape (:data:`NEAR_CRITICAL_REBUILDS`; at (0.6, 1.94) the
+  consistent ladder then contracts by 0.26–0.38 per +8 modes instead of ~0.4 and converges at
+  88 or 96 modes).
+* the levels on that density, +:data:`LEVEL_STEP` = 8 modes each, form a consistent ladder:
+  each starts from the previous minimum with its Jacobian prolonged (:mod:`bem.vesicle.level`),
+  and their successive differences contract geometrically (spectral convergence; ratios
+  0.02–0.3 per 8 modes measured at (0.9, 1.0), (0.8, 1.0), (0.7, 1.5), (0.6, 1.5), (0.6, 1.94)).
 * the error estimate of the last level is the tail of that geometric series,
   :data:`ESTIMATE_SAFETY` × d ρ/(1 − ρ) from the last two differences, ρ the median of the
   three outputs' contractions (:func:`_error_estimate`); the ladder stops at the first level
-  where three consistent levels give an estimate within ``tol`` (V/U, Δp⁺) and
-  ``tension_tol`` (γ_max) and the residual is below ``residual_tol``.
+  where :data:`ESTIMATE_LEVELS` = 3 consistent levels give an estimate within ``tol`` (V/U,
+  Δp⁺) and ``tension_tol`` (γ_max) and the residual is below ``residual_tol``.
 
 With ``n_modes`` given, the ladder is a single pair (round(2n/3), n) on the seed's density,
 and its estimate is the pair difference (an overestimate).
@@ -52,9 +57,10 @@ uniform arc length.
 
 The result is the last level's, with every problem named and the leading one as its status
 (:data:`lubrication.results.PRECEDENCE`): a self-intersecting membrane or a film closing below
-1e-3 R (NO_STEADY_STATE), an estimated error above the tolerance (UNRESOLVED), a steady residual
-above ``residual_tol`` or Levenberg–Marquardt failing on the last level (NOT_CONVERGED), the
-time limit (TIME_LIMIT), no level able to start (REJECTED_START).
+:data:`FILM_CLOSED` = 1e-3 R (NO_STEADY_STATE), an estimated error above the tolerance
+(UNRESOLVED), a steady residual above ``residual_tol`` or Levenberg–Marquardt failing on the
+last level (NOT_CONVERGED), the time limit (TIME_LIMIT), no level able to start
+(REJECTED_START).
 """
 
 from __future__ import annotations
@@ -63,7 +69,7 @@ import dataclasses
 import logging
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -85,11 +91,17 @@ from .seeds import (
     spheroid_seed,
 )
 
-__all__ = ["ESTIMATED_OUTPUTS", "ESTIMATE_SAFETY", "LONG_VESICLE", "MIN_CONTRACTION",
-           "NEAR_CRITICAL_REBUILDS", "REBUILD_LEVEL", "RUNG_MAX_LENGTH", "LadderOptions",
-           "solve_from"]
+__all__ = ["CARRIER_STEP", "ESTIMATED_OUTPUTS", "ESTIMATE_LEVELS", "ESTIMATE_SAFETY",
+           "FILM_CLOSED", "FIRST_LEVEL", "LEVEL_STEP", "LONG_CONSISTENT_LEVELS",
+           "LONG_FIRST_MIN", "LONG_FIRST_OFFSET", "LONG_MODES_PER_LENGTH", "LONG_VESICLE",
+           "MIN_CONTRACTION", "NEAR_CRITICAL_REBUILDS", "PAIR_COARSE_FRACTION", "PAIR_LEVELS",
+           "PAIR_MIN_MODES", "REBUILD_LEVEL", "RUNG_GAP_FACTOR", "RUNG_MAX_LENGTH",
+           "RUNG_RESIDUAL_TOL", "RUNG_TENSION_TOL", "RUNG_TOL", "RUNG_XTOL", "SHORT_MAX_MODES",
+           "SPHEROID_MAX_RADIUS", "LadderOptions", "LadderPlan", "plan_ladder", "solve_from"]
 
 log = logging.getLogger(__name__)
+
+# --- the regime --------------------------------------------------------------------------------
 
 #: estimated length L/R above which :func:`bem.vesicle.solve_vesicle` uses the "bend" density
 #: by default: long vesicles (ν ≲ 0.75 near λc) need it, e.g. at (0.7, 1.5) the residual falls
@@ -104,6 +116,54 @@ LONG_VESICLE = 5.0
 #: 32-mode rungs (residual 1e-2 at each rung; at the target Δp⁺ 2818 at 40 modes, against
 #: 1778 mode-converged) and converges from its own lubrication shape
 RUNG_MAX_LENGTH = 9.0
+
+# --- the levels --------------------------------------------------------------------------------
+
+#: modes of the first level of an automatic ladder from a model seed, and the fewest modes a
+#: ladder from a BEM seed starts with (no measurement recorded)
+FIRST_LEVEL = 16
+
+#: modes added from one level of a consistent ladder to the next: the successive differences
+#: contract by 0.02–0.3 per 8 modes (module docstring), and +16 instead, measured for a long
+#: vesicle near lam_c, left the Δp⁺ estimate above ``tol`` where the +8 ladder converges
+#: ((0.6, 1.94): 64, 80, 96 modes, estimate 1.1e-4 relative; docs/vesicle-solver.md)
+LEVEL_STEP = 8
+
+#: modes added from one carrier level to the next (16, 32, ... below a long vesicle's
+#: ``first``; each one difference Jacobian, which keeps the cold start on the physical branch:
+#: started at 43–64 modes it drifts to a closing film); the spacing: no measurement recorded
+CARRIER_STEP = 16
+
+#: a long vesicle's first level on the re-built density (:func:`_long_first_level`): about
+#: LONG_MODES_PER_LENGTH modes per R of estimated length in steps of LEVEL_STEP, minus
+#: LONG_FIRST_OFFSET, at least LONG_FIRST_MIN (no measurement recorded for the three)
+LONG_MODES_PER_LENGTH = 6
+LONG_FIRST_OFFSET = 16
+LONG_FIRST_MIN = 24
+
+#: consistent levels of a long vesicle's default ladder (``max_modes`` None; a second
+#: re-build takes one more level): the unconverged carrier levels make the re-built density
+#: depend on details such as the wall mesh, and at (0.6, 0.98 lam_c) the ladder converged at
+#: its fourth consistent level with one mesh and at its fifth with another
+#: (:data:`NEAR_CRITICAL_REBUILDS`)
+LONG_CONSISTENT_LEVELS = 5
+
+#: default top of a short vesicle's automatic ladder (``max_modes`` None; no measurement
+#: recorded)
+SHORT_MAX_MODES = 80
+
+#: consistent levels the extrapolated error estimate needs: two successive differences give
+#: the contraction ρ (:func:`_error_estimate`); a ladder from a BEM seed, or a long vesicle's
+#: re-built density, starts at most at ``max_modes`` − LEVEL_STEP (ESTIMATE_LEVELS − 1), so that
+#: it has this many levels
+ESTIMATE_LEVELS = 3
+
+#: levels of the pair ladder with ``n_modes`` given (its estimate is the one difference):
+#: the coarse level has PAIR_COARSE_FRACTION of the modes, at least PAIR_MIN_MODES (no
+#: measurement recorded for the two)
+PAIR_LEVELS = 2
+PAIR_COARSE_FRACTION = 2 / 3
+PAIR_MIN_MODES = 6
 
 #: levels in a row whose density is re-built on the BEM shape of the level before, for a long
 #: vesicle near lam_c started from its own lubrication shape (ℓ > RUNG_MAX_LENGTH): the first
@@ -125,13 +185,49 @@ NEAR_CRITICAL_REBUILDS = 2
 #: rest of a short vesicle's automatic ladder (the seed's density family; "bend" for uniform)
 REBUILD_LEVEL = 0
 
+# --- continuation rungs ------------------------------------------------------------------------
+
+#: gap 1 − λ/λc of each rung relative to the one before: the rungs lie at gaps 1 − NEAR_CRITICAL
+#: = 0.1, 0.05, 0.025, ... below lam_c (no measurement recorded)
+RUNG_GAP_FACTOR = 0.5
+#: a rung within this of the target λ/λc is the target itself (the rounding of λ/λc)
+RUNG_TARGET_MARGIN = 1e-9
+#: decimals a rung's λ/λc is rounded to (its halved gaps are exact only to rounding)
+RUNG_DIGITS = 12
+
+#: tolerances of a rung (``tol``, ``tension_tol``, ``residual_tol`` of its pair of
+#: ``rung_modes``): they set only the rung's own status, which the continuation does not test
+#: (it stops only on a rung without a shape or with NO_STEADY_STATE), so they are loose: a rung
+#: seeds the next, it is not an answer (no measurement recorded)
+RUNG_TOL = 0.5
+RUNG_TENSION_TOL = 0.5
+RUNG_RESIDUAL_TOL = 10.0
+#: Levenberg–Marquardt step tolerance of a rung: :func:`bem.vesicle.solve_vesicle`'s default
+#: ``xtol``, not this start's (a rung's iteration budget and method are the defaults too)
+RUNG_XTOL = 1e-9
+
+# --- the seed and the result -------------------------------------------------------------------
+
+#: widest spheroid seed [R]: a wider one (a prolate spheroid of small ν and large λ fills the
+#: tube) is replaced by the capsule, which fits whenever the vesicle can pass
+#: (:func:`bem.vesicle.capsule_seed`); the margin: no measurement recorded
+SPHEROID_MAX_RADIUS = 0.95
+
+#: film thickness [R] below which the film counts as closed (NO_STEADY_STATE; no measurement
+#: recorded)
+FILM_CLOSED = 1e-3
+
+#: margin [R] of the parachute test (the profile reaching behind its rear pole) for the
+#: rounding of the profile's positions
+PROFILE_ROUNDING = 1e-12
+
 
 def _rungs(ratio: float) -> list[float]:
     """Continuation rungs below ``ratio``: 1 - lam/lam_c = 0.1, 0.05, 0.025, ..."""
     out, gap = [], 1.0 - NEAR_CRITICAL
-    while 1.0 - gap < ratio - 1e-9:
-        out.append(round(1.0 - gap, 12))
-        gap *= 0.5
+    while 1.0 - gap < ratio - RUNG_TARGET_MARGIN:
+        out.append(round(1.0 - gap, RUNG_DIGITS))
+        gap *= RUNG_GAP_FACTOR
     return out
 
 
@@ -196,7 +292,6 @@ def _within(err: dict, out: dict, tol: float, tension_tol: float) -> bool:
     return all(err[k] <= _tolerance(k, tol, tension_tol) * abs(out[k]) for k in ESTIMATED_OUTPUTS)
 
 
-
 @dataclass(frozen=True)
 class LadderOptions:
     """The choices of :func:`bem.vesicle.solve_vesicle` that the ladder takes as given (not
@@ -212,120 +307,275 @@ class LadderOptions:
     valley: bool | None
 
 
-def solve_from(case: VesicleInputs, initial, options: LadderOptions,
-               max_time: float | None = None) -> VesicleResult:
-    r"""Steady vesicle from one start: ``initial`` (as in :func:`bem.vesicle.solve_vesicle`),
-    or with None the solver's own seed (lubrication shape, continuation near lam_c), refined by
-    the mode ladder with its error estimate (module docstring). ``case``: the checked inputs
-    (:func:`bem.vesicle.check_vesicle_inputs`); ``options``: the choices passed on
-    unchecked; ``max_time`` [s] the budget of this start. The result is that of
-    :func:`bem.vesicle.solve_vesicle`, whose pipeline calls this once per start."""
-    t_start = time.perf_counter()
-    deadline = Deadline(max_time)
-    clock = time.monotonic()
-    nu, lam, lam_c, ca_b = case.nu, case.lam, case.lam_c, case.ca_b
-    n_modes, max_modes, rung_modes = case.n_modes, case.max_modes, case.rung_modes
-    tol, tension_tol, residual_tol = case.tol, case.tension_tol, case.residual_tol
-    density_terms, max_iter = case.density_terms, case.max_iter
-    order, xtol, density = options.order, options.xtol, options.density
-    continuation, valley = options.continuation, options.valley
+# --- step 1: the plan --------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class LadderPlan:
+    r"""What one start will do (:func:`plan_ladder`), the rules in the module docstring and at
+    the constants.
+
+    ``ratio`` λ/λc and ``ell`` the estimated length ℓc λ/λc [R] (Chen et al. 2020 eq. sL) set the
+    regime: ``long`` (ℓ > :data:`LONG_VESICLE`), ``continuation`` (near lam_c, ℓ ≤
+    :data:`RUNG_MAX_LENGTH`, no ``initial``; its ``rungs`` λ/λc below the target, empty without
+    it), ``valley`` (the valley Levenberg–Marquardt: long), the arc-length ``density`` ("film"
+    near lam_c unless long, else "bend") and ``rebuilt``, the family a density re-built on a BEM
+    shape takes (the seed's; "bend" for uniform). ``bem_seed``: the seed is a BEM minimum (the
+    rungs, or ``initial`` a result or curve), whose shape the density is built on.
+
+    The ladder: the mode counts ``sequence``, up to ``max_modes`` (given, else
+    :data:`SHORT_MAX_MODES`, or for a long vesicle ``first`` plus :data:`LONG_CONSISTENT_LEVELS`
+    levels and one per re-build, within :data:`~bem.vesicle.MAX_MODES`); ``first`` the regime's
+    first level on the re-built density (:data:`FIRST_LEVEL`, for a long vesicle
+    :func:`_long_first_level`); the level index ``rebuild`` on whose BEM shape the density is
+    re-built, again on each of the next ``rebuilds`` − 1 levels' (:data:`NEAR_CRITICAL_REBUILDS`
+    for a valley solve near lam_c from a model seed, else 1), None where the seed's density is
+    kept (a BEM seed, the pair); the levels below ``rebuild`` of a valley solve are carriers.
+    ``min_levels``: the consistent levels the stop test needs (:data:`PAIR_LEVELS` with
+    ``n_modes`` given, else :data:`ESTIMATE_LEVELS`).
+    """
+
+    ratio: float
+    ell: float
+    long: bool
+    continuation: bool
+    rungs: tuple[float, ...]
+    valley: bool
+    density: str
+    rebuilt: str
+    bem_seed: bool
+    first: int
+    rebuilds: int
+    max_modes: int
+    sequence: tuple[int, ...]
+    rebuild: int | None
+    min_levels: int
+
+    def rebuilds_density(self, i: int) -> bool:
+        """Whether level ``i`` first tries a density re-built on the level before's shape."""
+        return self.rebuild is not None and self.rebuild < i <= self.rebuild + self.rebuilds
+
+    def carrier(self, i: int) -> bool:
+        """Whether level ``i`` is a carrier (one difference Jacobian, it only seeds the next)."""
+        return self.rebuild is not None and self.valley and i < self.rebuild
+
+
+def _long_first_level(ell: float) -> int:
+    """A long vesicle's first level on the re-built density: ~LONG_MODES_PER_LENGTH modes per R
+    of estimated length ``ell``, in steps of LEVEL_STEP, minus LONG_FIRST_OFFSET, at least
+    LONG_FIRST_MIN."""
+    levels = round(LONG_MODES_PER_LENGTH / LEVEL_STEP * ell)
+    return max(LONG_FIRST_MIN, LEVEL_STEP * levels - LONG_FIRST_OFFSET)
+
+
+def _sequence(case: VesicleInputs, initial, *, ratio: float, continuation: bool, valley: bool,
+              bem_seed: bool, first: int, max_modes: int) -> tuple[list[int], int | None]:
+    """The ladder's mode counts and the index of the level whose shape re-builds the density
+    (None: the seed's density is kept), one of four ladders: the pair (``n_modes`` given); from
+    a BEM seed; carriers below a long vesicle's re-built density (valley); the plain ladder."""
+    top = max_modes - LEVEL_STEP * (ESTIMATE_LEVELS - 1)  # highest start that leaves 3 levels
+    if case.n_modes is not None:
+        return [max(PAIR_MIN_MODES, round(PAIR_COARSE_FRACTION * case.n_modes)),
+                case.n_modes], None
+    if bem_seed:
+        # from the seed's mode count near lam_c (a refit to fewer modes loses the thin film:
+        # from a 0.95 lam_c result refitted to 16 modes, the film of (0.98, 0.98 lam_c)
+        # closed); below, a continued result restarts low
+        start = (case.rung_modes if continuation else initial.modes.size
+                 if ratio > NEAR_CRITICAL else min(initial.modes.size, first))
+        start = min(max(FIRST_LEVEL, LEVEL_STEP * round(start / LEVEL_STEP)), top)
+        return list(range(start, max_modes + 1, LEVEL_STEP)), None
+    if valley:
+        first = min(first, top)
+        sequence = [*range(FIRST_LEVEL, first, CARRIER_STEP),
+                    *range(first, max_modes + 1, LEVEL_STEP)]
+        return sequence, sequence.index(first)
+    return list(range(FIRST_LEVEL, max_modes + 1, LEVEL_STEP)), REBUILD_LEVEL
+
+
+def plan_ladder(case: VesicleInputs, initial, options: LadderOptions) -> LadderPlan:
+    """The :class:`LadderPlan` of a start from ``initial`` (as in :func:`solve_from`).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``options.density`` not "auto", "uniform" or a key of DENSITIES.
+
+    Examples
+    --------
+    A long vesicle near lam_c: carriers 16, 32, the density built on the 48-mode shape and
+    re-built on the 56-mode one, five consistent levels 64–96; a short one from its rung:
+
+    >>> from bem.vesicle import check_vesicle_inputs
+    >>> options = LadderOptions(order=16, xtol=1e-9, density="auto", continuation=None,
+    ...                         valley=None)
+    >>> plan = plan_ladder(check_vesicle_inputs(0.6, lam_ratio=0.98), None, options)
+    >>> plan.density, plan.sequence, plan.rebuild, plan.rebuilds
+    ('bend', (16, 32, 48, 56, 64, 72, 80, 88, 96), 2, 2)
+    >>> plan = plan_ladder(check_vesicle_inputs(0.9, lam_ratio=0.95), None, options)
+    >>> plan.rungs, plan.density, plan.sequence[:3]
+    ((0.9,), 'film', (32, 40, 48))
+    """
+    density = options.density
     if density not in ("auto", "uniform", *DENSITIES):
         raise InvalidParameterError("density", density,
                                     '"auto", "uniform", "curvature", "bend" or "film"')
-    ratio = lam / lam_c
-    ell = critical_length(nu) * ratio                # estimated length L/R (Chen eq. sL)
+    ratio = case.lam / case.lam_c
+    ell = critical_length(case.nu) * ratio           # estimated length L/R (Chen eq. sL)
     long = ell > LONG_VESICLE
+    continuation = options.continuation
     if continuation is None:
         continuation = initial is None and ratio > NEAR_CRITICAL and ell <= RUNG_MAX_LENGTH
-    if valley is None:
-        valley = long
+    valley = long if options.valley is None else options.valley
     if density == "auto":
         density = "film" if ratio >= NEAR_CRITICAL and not long else "bend"
-    # the ladder (module docstring): levels of ``sequence``; a seed that is not a BEM minimum
-    # has the density re-built on the BEM shape of level ``rebuild`` (an index; near lam_c
-    # again on the next level's, ``rebuilds``), and every later level keeps it (a consistent
-    # ladder); a BEM seed (``initial`` a result, or the continuation rungs) already gives the
-    # density its shape
     bem_seed = continuation or isinstance(initial, (VesicleResult, SpectralCurve))
-    rebuilt = density if density in DENSITIES else "bend"
-    first = max(24, 8 * round(0.75 * ell) - 16) if long else 16
-    # levels whose density is re-built on the shape of the level before (NEAR_CRITICAL_REBUILDS)
+    first = _long_first_level(ell) if long else FIRST_LEVEL
     rebuilds = (NEAR_CRITICAL_REBUILDS if valley and ratio > NEAR_CRITICAL and not bem_seed
-                and n_modes is None else 1)
-    if max_modes is None:      # a second re-build takes a level: the consistent ladder keeps 5
-        max_modes = min(MAX_MODES, first + 32 + 8 * rebuilds if long else 80)
-    if n_modes is not None:
-        sequence, rebuild = [max(6, round(2 * n_modes / 3)), n_modes], None
-    elif bem_seed:       # from the seed's mode count near lam_c (a refit to fewer modes
-        # loses the thin film: from a 0.95 lam_c result refitted to 16 modes, the film of
-        # (0.98, 0.98 lam_c) closed); below, a continued result restarts low
-        start = (rung_modes if continuation else initial.modes.size if ratio > NEAR_CRITICAL
-                 else min(initial.modes.size, first))
-        start = min(max(16, 8 * round(start / 8)), max_modes - 16)
-        sequence, rebuild = list(range(start, max_modes + 1, 8)), None
-    elif valley:                     # carriers every 16 modes below the re-built density
-        first = min(first, max_modes - 16)
-        sequence = list(range(16, first, 16)) + list(range(first, max_modes + 1, 8))
-        rebuild = sequence.index(first)
-    else:
-        sequence, rebuild = list(range(16, max_modes + 1, 8)), REBUILD_LEVEL
-    seed_source = "initial"
-    rung_log = {}
+                and case.n_modes is None else 1)
+    max_modes = case.max_modes
+    if max_modes is None:
+        long_top = first + LEVEL_STEP * (LONG_CONSISTENT_LEVELS - 1 + rebuilds)
+        max_modes = min(MAX_MODES, long_top if long else SHORT_MAX_MODES)
+    sequence, rebuild = _sequence(case, initial, ratio=ratio, continuation=continuation,
+                                  valley=valley, bem_seed=bem_seed, first=first,
+                                  max_modes=max_modes)
+    return LadderPlan(
+        ratio=ratio, ell=ell, long=long, continuation=continuation,
+        rungs=tuple(_rungs(ratio)) if continuation else (), valley=valley, density=density,
+        rebuilt=density if density in DENSITIES else "bend", bem_seed=bem_seed, first=first,
+        rebuilds=rebuilds, max_modes=max_modes, sequence=tuple(sequence), rebuild=rebuild,
+        min_levels=PAIR_LEVELS if case.n_modes is not None else ESTIMATE_LEVELS)
 
-    def timed_out(what: str):
-        return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=Status.TIME_LIMIT,
-                             tol=tol, residual_tol=residual_tol, iterations=dict(rung_log),
-                             timings={"total_s": time.perf_counter() - t_start},
-                             message=f"{deadline.message()} ({what})")
-    if continuation:
-        # a rung: a single pair of rung_modes on this start's density at loose tolerances; its
-        # step tolerance, iteration budget and method are the defaults, not this start's
-        rung_options = LadderOptions(order=order, xtol=1e-9, density=density,
-                                     continuation=False, valley=None)
-        rung = None
-        for q in _rungs(ratio):
-            left = None if max_time is None else max_time - (time.monotonic() - clock)
-            if left is not None and left <= 0.0:
-                return timed_out(f"continuation rung lam/lam_c = {q:g}")
-            rung_case = check_vesicle_inputs(nu, lam_ratio=q, ca_b=ca_b, n_modes=rung_modes,
-                                             tol=0.5, tension_tol=0.5, residual_tol=10.0,
-                                             density_terms=density_terms)
-            rung = solve_from(rung_case, rung, rung_options, left)
-            if deadline.expired():
-                return timed_out(f"continuation rung lam/lam_c = {q:g}")
-            rung_log[f"rung{q:g}"] = {
-                "evaluations": sum(v["evaluations"] for v in rung.iterations.values()),
-                "seconds": rung.timings.get("total_s", math.nan), "residual": rung.residual}
-            if rung.modes.size == 0 or rung.status is Status.NO_STEADY_STATE:
-                return VesicleResult(
-                    nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=rung.status, tol=tol,
-                    residual_tol=residual_tol, timings={"total_s": time.perf_counter() - t_start},
-                    message=f"continuation failed at lam/lam_c = {q:g}: {rung.message}")
-            log.info("solve_vesicle continuation rung lam/lam_c=%g: V/U=%.6f dp+R0=%.5g "
-                     "residual %.1e", q, rung.V_over_U, rung.dp_plus_R0, rung.residual)
-        if rung is not None:
-            initial = rung
-            seed_source = f"continuation (lam/lam_c = {', '.join(f'{r:g}' for r in _rungs(ratio))})"
+
+# --- the budget of a start ---------------------------------------------------------------------
+
+class _Budget:
+    """The wall-time budget of one start, ``max_time`` [s] from its creation: a
+    :class:`~lubrication.checks.Deadline` tested between evaluations, levels and rungs, and the
+    seconds left for a nested start (a rung, the fallback to the own seed)."""
+
+    def __init__(self, max_time: float | None):
+        self.t_start = time.perf_counter()
+        self.deadline = Deadline(max_time)
+        self.clock = time.monotonic()
+        self.max_time = max_time
+
+    def left(self) -> float | None:
+        """Seconds left (may be <= 0); None without a limit."""
+        return None if self.max_time is None else self.max_time - (time.monotonic() - self.clock)
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.t_start
+
+
+class _Stopped(Exception):
+    """Ends a start before its ladder with the result it carries (time limit, failed rung)."""
+
+    def __init__(self, result: VesicleResult):
+        super().__init__(result.message)
+        self.result = result
+
+
+def _stopped(case: VesicleInputs, budget: _Budget, status: Status, message: str,
+             iterations: dict | None = None) -> _Stopped:
+    """A start ended before any level, as the :class:`_Stopped` that carries its result."""
+    return _Stopped(VesicleResult(
+        nu=case.nu, lam=case.lam, lam_c=case.lam_c, ca_b=case.ca_b, status=status,
+        tol=case.tol, residual_tol=case.residual_tol, iterations=dict(iterations or {}),
+        timings={"total_s": budget.elapsed()}, message=message))
+
+
+def _time_limit(case: VesicleInputs, budget: _Budget, what: str, iterations: dict) -> _Stopped:
+    return _stopped(case, budget, Status.TIME_LIMIT, f"{budget.deadline.message()} ({what})",
+                    iterations)
+
+
+# --- step 2: continuation rungs ----------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Start:
+    """What the seed is made from: ``initial`` (as in :func:`solve_from`, or the last rung),
+    its label ``source`` and the rungs' ``iterations``."""
+
+    initial: object
+    source: str
+    iterations: dict = field(default_factory=dict)
+
+
+def _continuation(case: VesicleInputs, plan: LadderPlan, options: LadderOptions, initial,
+                  budget: _Budget) -> _Start:
+    """The rungs of ``plan``, each a pair of ``rung_modes`` on this start's density at the
+    loose RUNG_* tolerances, solved from the one before (the first from lubrication); the last
+    one is the start (``initial`` if there is none). Raises :class:`_Stopped` at the time limit
+    and where a rung ends without a shape or with no steady state."""
+    rung_options = LadderOptions(order=options.order, xtol=RUNG_XTOL, density=plan.density,
+                                 continuation=False, valley=None)
+    rung, iterations = None, {}
+    for q in plan.rungs:
+        what = f"continuation rung lam/lam_c = {q:g}"
+        left = budget.left()
+        if left is not None and left <= 0.0:
+            raise _time_limit(case, budget, what, iterations)
+        rung_case = check_vesicle_inputs(case.nu, lam_ratio=q, ca_b=case.ca_b,
+                                         n_modes=case.rung_modes, tol=RUNG_TOL,
+                                         tension_tol=RUNG_TENSION_TOL,
+                                         residual_tol=RUNG_RESIDUAL_TOL,
+                                         density_terms=case.density_terms)
+        rung = solve_from(rung_case, rung, rung_options, left)
+        if budget.deadline.expired():
+            raise _time_limit(case, budget, what, iterations)
+        iterations[f"rung{q:g}"] = {
+            "evaluations": sum(v["evaluations"] for v in rung.iterations.values()),
+            "seconds": rung.timings.get("total_s", math.nan), "residual": rung.residual}
+        if rung.modes.size == 0 or rung.status is Status.NO_STEADY_STATE:
+            raise _stopped(case, budget, rung.status,
+                           f"continuation failed at lam/lam_c = {q:g}: {rung.message}")
+        log.info("solve_vesicle continuation rung lam/lam_c=%g: V/U=%.6f dp+R0=%.5g "
+                 "residual %.1e", q, rung.V_over_U, rung.dp_plus_R0, rung.residual)
+    if rung is None:
+        return _Start(initial, "initial", iterations)
+    labels = ", ".join(f"{r:g}" for r in plan.rungs)
+    return _Start(rung, f"continuation (lam/lam_c = {labels})", iterations)
+
+
+# --- step 3: the seed --------------------------------------------------------------------------
+
+def _model_seed(case: VesicleInputs, n: int) -> tuple[SpectralCurve, str]:
+    """The last-resort seed of ``n`` modes: the prolate spheroid, or the capsule where the
+    spheroid is wider than SPHEROID_MAX_RADIUS."""
+    seed = spheroid_seed(case.nu, case.lam, n)
+    if seed.max_radius() > SPHEROID_MAX_RADIUS:
+        return capsule_seed(case.nu, case.lam, n), "capsule"
+    return seed, "spheroid"
+
+
+def _seed(case: VesicleInputs, plan: LadderPlan, start: _Start,
+          deadline: Deadline) -> tuple[SpectralCurve, str]:
+    """The first level's seed curve, on the plan's density, and its label: a given curve or
+    result's shape; a lubrication result's shape, or the lubrication seed's without one
+    (:mod:`bem.vesicle.seeds`); the spheroid or capsule where these fail.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``initial`` of another type, or a result without a shape.
+    """
+    n, density, terms = plan.sequence[0], plan.density, case.density_terms
+    initial, source = start.initial, start.source
     from_lubrication = False                         # the seed is already fitted with density
-    if deadline.expired():
-        return timed_out("before the seed")
     if isinstance(initial, SpectralCurve):
         seed = initial
     elif isinstance(initial, LubricationResult) or initial is None:
         seed = None
         if initial is None:
-            seed, _ = lubrication_seed(nu, lam, ca_b, sequence[0], density, density_terms,
+            seed, _ = lubrication_seed(case.nu, case.lam, case.ca_b, n, density, terms,
                                        max_time=deadline.remaining())
-            seed_source = "lubrication"
+            source = "lubrication"
         elif initial.success:
-            seed = seed_from_lubrication(initial, sequence[0], density, density_terms)
+            seed = seed_from_lubrication(initial, n, density, terms)
         from_lubrication = seed is not None
         if seed is None:
-            seed = spheroid_seed(nu, lam, sequence[0])
-            seed_source = "spheroid"
-            if seed.max_radius() > 0.95:                   # a spheroid of small nu: too fat
-                seed = capsule_seed(nu, lam, sequence[0])
-                seed_source = "capsule"
+            seed, source = _model_seed(case, n)
     elif isinstance(initial, VesicleResult):
         if initial.modes.size == 0:
             raise InvalidParameterError("initial", "a VesicleResult without a shape",
@@ -335,106 +585,147 @@ def solve_from(case: VesicleInputs, initial, options: LadderOptions,
         raise InvalidParameterError("initial", type(initial).__name__,
                                     "a VesicleResult, SpectralCurve, LubricationResult or None")
     if density != "uniform" and not from_lubrication:
-        seed = fit_curve(seed.sample, 0.0, 1.0, sequence[0],
-                         density=DENSITIES[density](seed, density_terms))
-    levels, timings, iterations = [], {}, dict(rung_log)
-    status, message = Status.CONVERGED, ""        # the ladder's own failure, if any
+        seed = fit_curve(seed.sample, 0.0, 1.0, n, density=DENSITIES[density](seed, terms))
+    return seed, source
+
+
+# --- step 4: the climb -------------------------------------------------------------------------
+
+@dataclass
+class _Ladder:
+    """The levels climbed, each (state, operator, outputs), with the ladder's own failure
+    (``status``, ``message``; CONVERGED and "" if none) and ``consistent``, the index of the
+    first level on the density of the last one."""
+
+    iterations: dict
+    levels: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+    status: Status = Status.CONVERGED
+    message: str = ""
+    consistent: int = 0
+
+    def estimate(self) -> dict:
+        """The error estimate of the last level from the consistent ones (_error_estimate)."""
+        return _error_estimate([lv[2] for lv in self.levels[self.consistent:]])
+
+    def resolved(self, case: VesicleInputs, plan: LadderPlan) -> bool:
+        """Whether the ladder stops here: enough consistent levels, the estimate within the
+        tolerances and the steady residual within ``residual_tol``."""
+        err = self.estimate()
+        fine = self.levels[-1][2]
+        return (len(self.levels) - self.consistent >= plan.min_levels
+                and _within(err, fine, case.tol, case.tension_tol)
+                and fine["residual"] <= case.residual_tol)
+
+    def stop(self, status: Status, message: str) -> None:
+        self.status, self.message = status, message
+
+
+def _level_seeds(case: VesicleInputs, plan: LadderPlan, i: int, n: int, prev: SpectralCurve,
+                 ladder: _Ladder) -> list:
+    """The seeds of level ``i`` (``n`` modes) in the order tried, from the last shape ``prev``.
+
+    After one whose density the level rejects: a density re-built on a shape that does not carry
+    it (at (0.95, 0.2 lam_c) the 16-mode level stopped at a 5e-2 step and the 24-mode curve on
+    its density had no positive volume) gives way to the seed's density, and a first level whose
+    seed density fails (the "bend" density of the lubrication shape at (0.85, 0.2 lam_c): a
+    curve c_1 cannot close) starts on uniform arc length (None: made when needed). Where the
+    plan re-builds the density here, the re-built curve comes first (it resolves what the
+    seed's density misses, e.g. a long vesicle's rear film neck) and starts a consistent ladder.
+    """
+    seeds = [prev, None] if not ladder.levels and np.size(prev.density) else [prev]
+    if plan.rebuilds_density(i) and ladder.levels:
+        try:
+            seeds = [fit_curve(prev.sample, 0.0, 1.0, n,
+                               density=DENSITIES[plan.rebuilt](prev, case.density_terms)), prev]
+            ladder.consistent = len(ladder.levels)
+        except InvalidParameterError:
+            pass
+    return seeds
+
+
+def _start_level(case: VesicleInputs, plan: LadderPlan, options: LadderOptions, i: int, n: int,
+                 seeds: list, prev: SpectralCurve, ladder: _Ladder, deadline: Deadline):
+    """Level ``i`` solved from the first of ``seeds`` it accepts: (state, op, info), or None
+    and the last rejection. A carrier starts from a fresh difference Jacobian (one prolonged
+    from the unfinished level below led the cold start of (0.6, 1.94) to Δp⁺ 2829 at 32 modes,
+    1778 converged); a later seed is not a carrier and breaks the consistent ladder."""
+    disc = vesicle_discretisation(n, options.order)
+    levels, rejected = ladder.levels, None
+    for k, seed in enumerate(seeds):
+        if k:
+            log.info("solve_vesicle: density rejected at %d modes (%s)", n, rejected)
+            ladder.consistent = 0
+        as_carrier = plan.carrier(i) and not k
+        try:
+            return solve_level(
+                case.nu, case.lam, case.ca_b, disc, fit_curve(prev.sample, 0.0, 1.0, n)
+                if seed is None else seed, n, xtol=options.xtol, max_iter=case.max_iter,
+                seed_level=not levels, valley=plan.valley, carrier=as_carrier,
+                deadline=deadline,
+                coarse=(levels[-1][1], levels[-1][0]) if levels and not as_carrier else None), None
+        except InvalidParameterError as exc:
+            rejected = exc
+    return None, rejected
+
+
+def _climb(case: VesicleInputs, plan: LadderPlan, options: LadderOptions, seed: SpectralCurve,
+           deadline: Deadline, iterations: dict) -> _Ladder:
+    """The levels of ``plan.sequence`` from ``seed``, until one is resolved
+    (:meth:`_Ladder.resolved`), the time limit, a level that no seed can start, or
+    Levenberg–Marquardt failing on the last level. An unfinished coarser level only seeds the
+    next one, which is judged on its own."""
+    ladder = _Ladder(iterations=dict(iterations))
     prev = seed
-    consistent = 0           # index of the first level on the density of the last one
-    for i, n in enumerate(sequence):
+    for i, n in enumerate(plan.sequence):
         if deadline.expired():
-            status = Status.TIME_LIMIT
-            message = f"{deadline.message()} (before the level with {n} modes)"
+            ladder.stop(Status.TIME_LIMIT,
+                        f"{deadline.message()} (before the level with {n} modes)")
             break
-        disc = vesicle_discretisation(n, order)
         t0 = time.perf_counter()
-        # the seeds of this level in the order tried: after one whose density the level
-        # rejects, a density re-built on a shape that does not carry it (at (0.95, 0.2 lam_c)
-        # the 16-mode level stopped at a 5e-2 step and the 24-mode curve on its density had no
-        # positive volume) gives way to the seed's density, and a first level whose seed
-        # density fails (the "bend" density of the lubrication shape at (0.85, 0.2 lam_c): a
-        # curve c_1 cannot close) starts on uniform arc length (None: made when needed)
-        seeds = [prev, None] if not levels and np.size(prev.density) else [prev]
-        if rebuild is not None and rebuild < i <= rebuild + rebuilds and levels:
-            # the density re-built on the BEM shape of the level before (it resolves what the
-            # seed's density misses, e.g. a long vesicle's rear film neck)
-            try:
-                seeds = [fit_curve(prev.sample, 0.0, 1.0, n,
-                                   density=DENSITIES[rebuilt](prev, density_terms)), prev]
-                consistent = len(levels)
-            except InvalidParameterError:
-                pass
-        # a carrier starts from a fresh difference Jacobian: one prolonged from the (unfinished)
-        # level below led the cold start of (0.6, 1.94) to Δp⁺ 2829 at 32 modes (1778 converged)
-        carrier = rebuild is not None and valley and i < rebuild
-        st = rejected = None
-        for k, seed in enumerate(seeds):
-            if k:
-                log.info("solve_vesicle: density rejected at %d modes (%s)", n, rejected)
-                consistent = 0
-            as_carrier = carrier and not k
-            try:
-                st, op, info = solve_level(
-                    nu, lam, ca_b, disc, fit_curve(prev.sample, 0.0, 1.0, n) if seed is None
-                    else seed, n, xtol=xtol, max_iter=max_iter, seed_level=not levels,
-                    valley=valley, carrier=as_carrier, deadline=deadline,
-                    coarse=(levels[-1][1], levels[-1][0]) if levels and not as_carrier else None)
-                break
-            except InvalidParameterError as exc:
-                rejected = exc
-        if st is None:
-            # no seed of this level could start: the solve's start if it is the first level
-            status = Status.NOT_CONVERGED if levels else Status.REJECTED_START
-            message = f"level with {n} modes: {rejected}"
+        seeds = _level_seeds(case, plan, i, n, prev, ladder)
+        solved, rejected = _start_level(case, plan, options, i, n, seeds, prev, ladder, deadline)
+        if solved is None:      # no seed could start: the solve's start if it is the first level
+            ladder.stop(Status.NOT_CONVERGED if ladder.levels else Status.REJECTED_START,
+                        f"level with {n} modes: {rejected}")
             break
-        timings[f"modes{n}_s"] = time.perf_counter() - t0
-        iterations[f"modes{n}"] = info
-        out = level_outputs(nu, lam, op, st)
-        levels.append((st, op, out))
+        st, op, info = solved
+        ladder.timings[f"modes{n}_s"] = time.perf_counter() - t0
+        ladder.iterations[f"modes{n}"] = info
+        out = level_outputs(case.nu, case.lam, op, st)
+        ladder.levels.append((st, op, out))
         log.info("solve_vesicle nu=%g lam=%g modes=%d: V/U=%.10f dp+R0=%.8g gmax=%.6g "
-                 "residual %.2e (%s)", nu, lam, n, out["V_over_U"], out["dp_plus_R0"],
+                 "residual %.2e (%s)", case.nu, case.lam, n, out["V_over_U"], out["dp_plus_R0"],
                  out["tension_max"], out["residual"], info["message"])
         if not info["success"]:
             if deadline.expired():
-                status = Status.TIME_LIMIT
-                message = f"{deadline.message()} (in the level with {n} modes)"
+                ladder.stop(Status.TIME_LIMIT,
+                            f"{deadline.message()} (in the level with {n} modes)")
                 break
-            if n == sequence[-1]:
-                status = Status.NOT_CONVERGED
-                message = f"Levenberg–Marquardt failed with {n} modes: {info['message']}"
+            if n == plan.sequence[-1]:
+                ladder.stop(Status.NOT_CONVERGED,
+                            f"Levenberg–Marquardt failed with {n} modes: {info['message']}")
                 break
-            # a coarser level only seeds the next one, which is judged on its own (residual,
-            # refinement pair): an unfinished coarse level is not a failure of the solve
             log.info("solve_vesicle: level with %d modes unfinished (%s); refining", n,
                      info["message"])
         prev = st["curve"]
-        err = _error_estimate([lv[2] for lv in levels[consistent:]])
-        if (len(levels) - consistent >= (2 if n_modes is not None else 3)
-                and _within(err, levels[-1][2], tol, tension_tol)
-                and levels[-1][2]["residual"] <= residual_tol):
+        if ladder.resolved(case, plan):
             break
-    timings["total_s"] = time.perf_counter() - t_start
-    if not levels and bem_seed and not continuation and not deadline.expired():
-        # a continued shape that cannot start at this lam (its volume re-imposed, the film of
-        # (0.98, 0.95 lam_c) closed at 0.98 lam_c): the solver's own seed and continuation
-        log.info("solve_vesicle: the given initial shape was rejected (%s); own seed", message)
-        left = None if max_time is None else max_time - (time.monotonic() - clock)
-        if left is None or left > 0.0:
-            return solve_from(case, None, dataclasses.replace(options, continuation=None), left)
-    if not levels:
-        return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=status,
-                             message=message, tol=tol, residual_tol=residual_tol,
-                             iterations=iterations, timings=timings)
-    st, op, fine = levels[-1]
-    err = _error_estimate([lv[2] for lv in levels[consistent:]])
-    curve = st["curve"]
-    prof = membrane_profile(curve, st["g"])
-    # every problem is named; the status is the leading one (lubrication.results.PRECEDENCE)
-    problems, found = ([message], [status]) if message else ([], [])
+    return ladder
+
+
+# --- step 5: the result ------------------------------------------------------------------------
+
+def _verdict(case: VesicleInputs, ladder: _Ladder, prof: dict, err: dict) -> tuple[Status, str]:
+    """Status and message of the last level: every problem named, the status the leading one
+    (:data:`lubrication.results.PRECEDENCE`), else the converged summary."""
+    fine = ladder.levels[-1][2]
+    tol, tension_tol, residual_tol = case.tol, case.tension_tol, case.residual_tol
+    problems, found = ([ladder.message], [ladder.status]) if ladder.message else ([], [])
     if self_intersects(prof["x"], prof["r"]):
         problems.append("the membrane self-intersects")
         found.append(Status.NO_STEADY_STATE)
-    if fine["film_min"] < 1e-3:
+    if fine["film_min"] < FILM_CLOSED:
         problems.append(f"the film closes (min gap {fine['film_min']:.2e} R)")
         found.append(Status.NO_STEADY_STATE)
     bad = [k for k in ESTIMATED_OUTPUTS
@@ -448,13 +739,23 @@ def solve_from(case: VesicleInputs, initial, options: LadderOptions,
         problems.append(f"steady residual max|u - V e_x| = {fine['residual']:.2e} exceeds "
                         f"residual_tol={residual_tol:g}")
         found.append(Status.NOT_CONVERGED)
-    status = leading_status(found)
-    success = status is Status.CONVERGED
     message = ("; ".join(problems) if problems else
                f"converged: {fine['panels']['modes']} modes, estimated errors "
                + ", ".join(f"{k} {err[k]:.1e}" for k in ESTIMATED_OUTPUTS)
                + f", residual {fine['residual']:.1e}")
-    if not success:              # one start of the pipeline: solve_vesicle reports the outcome
+    return leading_status(found), message
+
+
+def _result(case: VesicleInputs, ladder: _Ladder, source: str) -> VesicleResult:
+    """The VesicleResult of the last level: outputs, profile, wall shear, shape class, the
+    refinement history and the verdict (:func:`_verdict`)."""
+    nu, lam = case.nu, case.lam
+    st, op, fine = ladder.levels[-1]
+    err = ladder.estimate()
+    curve = st["curve"]
+    prof = membrane_profile(curve, st["g"])
+    status, message = _verdict(case, ladder, prof, err)
+    if status is not Status.CONVERGED:  # one start of the pipeline: solve_vesicle reports it
         log.info("solve_vesicle start (nu=%g, lam=%g): %s", nu, lam, message)
     try:
         wall_x, wall_shear = op.wall_shear(curve, st["g"])
@@ -463,11 +764,11 @@ def solve_from(case: VesicleInputs, initial, options: LadderOptions,
         wall_x = wall_shear = np.empty(0)
     k_rear = curve.curvatures(np.array([0.0]))[0][0]
     k_front = curve.curvatures(np.array([1.0]))[0][0]
-    parachute = bool(k_rear < 0.0 or np.min(prof["x"]) < prof["x"][0] - 1e-12)
+    parachute = bool(k_rear < 0.0 or np.min(prof["x"]) < prof["x"][0] - PROFILE_ROUNDING)
     history = [(lv[2]["panels"]["modes"], lv[2]["residual"], lv[2]["V_over_U"],
-                lv[2]["dp_plus_R0"], lv[2]["tension_max"]) for lv in levels]
+                lv[2]["dp_plus_R0"], lv[2]["tension_max"]) for lv in ladder.levels]
     return VesicleResult(
-        nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=status, message=message,
+        nu=nu, lam=lam, lam_c=case.lam_c, ca_b=case.ca_b, status=status, message=message,
         V_over_U=fine["V_over_U"], dp_plus_R0=fine["dp_plus_R0"], dp_plus_R=fine["dp_plus_R"],
         ell=fine["ell"], ell_poles=fine["ell_poles"], film_min=fine["film_min"],
         tension_max=fine["tension_max"],
@@ -477,7 +778,49 @@ def solve_from(case: VesicleInputs, initial, options: LadderOptions,
         curvature_rear=-float(k_rear), curvature_front=-float(k_front),
         shape_class="parachute" if parachute else "bullet", error_estimate=err,
         volume_error=fine["volume_error"], area_error=fine["area_error"],
-        residual=fine["residual"], tol=tol, residual_tol=residual_tol, panels=fine["panels"],
-        refinement=history, seed=seed_source, iterations=iterations, timings=timings,
-        modes=curve.modes.copy(), density=np.asarray(curve.density).copy(),
-        tension_modes=np.asarray(st["g"]).copy(), **prof)
+        residual=fine["residual"], tol=case.tol, residual_tol=case.residual_tol,
+        panels=fine["panels"], refinement=history, seed=source, iterations=ladder.iterations,
+        timings=ladder.timings, modes=curve.modes.copy(),
+        density=np.asarray(curve.density).copy(), tension_modes=np.asarray(st["g"]).copy(),
+        **prof)
+
+
+def solve_from(case: VesicleInputs, initial, options: LadderOptions,
+               max_time: float | None = None) -> VesicleResult:
+    r"""Steady vesicle from one start: ``initial`` (as in :func:`bem.vesicle.solve_vesicle`),
+    or with None the solver's own seed (lubrication shape, continuation near lam_c), refined by
+    the mode ladder with its error estimate (module docstring). ``case``: the checked inputs
+    (:func:`bem.vesicle.check_vesicle_inputs`); ``options``: the choices passed on
+    unchecked; ``max_time`` [s] the budget of this start. The result is that of
+    :func:`bem.vesicle.solve_vesicle`, whose pipeline calls this once per start.
+
+    The steps: the plan (:func:`plan_ladder`), the continuation rungs, the seed, the climb
+    through the levels, the result; a given shape that no level can start from is replaced by
+    the solver's own seed (module docstring, the fallbacks)."""
+    budget = _Budget(max_time)
+    plan = plan_ladder(case, initial, options)
+    try:
+        start = (_continuation(case, plan, options, initial, budget) if plan.continuation
+                 else _Start(initial, "initial"))
+        if budget.deadline.expired():
+            raise _time_limit(case, budget, "before the seed", start.iterations)
+    except _Stopped as stop:
+        return stop.result
+    seed, source = _seed(case, plan, start, budget.deadline)
+    ladder = _climb(case, plan, options, seed, budget.deadline, start.iterations)
+    ladder.timings["total_s"] = budget.elapsed()
+    if (not ladder.levels and plan.bem_seed and not plan.continuation
+            and not budget.deadline.expired()):
+        # a continued shape that cannot start at this lam (its volume re-imposed, the film of
+        # (0.98, 0.95 lam_c) closed at 0.98 lam_c): the solver's own seed and continuation
+        log.info("solve_vesicle: the given initial shape was rejected (%s); own seed",
+                 ladder.message)
+        left = budget.left()
+        if left is None or left > 0.0:
+            return solve_from(case, None, dataclasses.replace(options, continuation=None), left)
+    if not ladder.levels:
+        return VesicleResult(nu=case.nu, lam=case.lam, lam_c=case.lam_c, ca_b=case.ca_b,
+                             status=ladder.status, message=ladder.message, tol=case.tol,
+                             residual_tol=case.residual_tol, iterations=ladder.iterations,
+                             timings=ladder.timings)
+    return _result(case, ladder, source)
