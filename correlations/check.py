@@ -30,7 +30,11 @@ Any number of rows
 :func:`check_summary` checks the rows as they are read and keeps, besides the verdict counts,
 the reports of at most :data:`MAX_LISTED_ROWS` rows (the worst) and about 60 bytes per row for
 the series checks (step 4), which need every row of a series: a million rows take about
-0.1 GB. :func:`check_results` keeps every row.
+0.1 GB. :func:`check_results` keeps every row. The rows are read in chunks of
+:data:`CHUNK_ROWS`; what their checks ask of λc, the solution map and the closed-form laws is
+computed for a whole chunk at once (:class:`_Batched`: one code path with a row checked alone,
+the same values), and with more than one core the chunks are checked in worker processes while
+the next are read.
 
 Checks, in the order they are made (module constants hold the measured numbers)
 ---------------------------------------------------------------------------------
@@ -71,17 +75,23 @@ The row's verdict is its worst check; the report's, its worst row.
 from __future__ import annotations
 
 import array
+import collections
+import concurrent.futures
 import csv
 import dataclasses
 import decimal
 import difflib
 import enum
 import functools
+import gc
 import heapq
+import itertools
 import math
+import multiprocessing
 import numbers
 import operator
 import os
+import signal
 import warnings
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -99,9 +109,9 @@ from .estimate import PHYSICAL_BOUNDS, physical_scales
 from .files import UnreadableFile, check_input_file, open_text, read_json
 from .pressure import dp_plus_film_chen2020
 from .registry import (MAP_DEFAULT_CA_B, SMALL_VESICLE_RANGE, MethodNotApplicable, guarded,
-                       map_method_name, map_query, resolve_solution_map)
+                       map_method_name, resolve_solution_map)
 from .shape import SHAPE_CLASS_RANGE_CHEN2020, shape_class_chen2020
-from .solution_map import outside_reason
+from .solution_map import outside_reason, query_map_many
 
 __all__ = ["COLUMNS", "ERROR_COLUMNS", "KINDS", "WARN_FACTOR", "Verdict", "InputError", "Row",
            "Reference", "CheckResult", "RowReport", "CheckReport", "TOLERANCE_RULE", "format_cell",
@@ -701,11 +711,58 @@ def parse_rows(source) -> list[Row]:
 
 # --------------------------------------------------------------------------- references
 
-@functools.lru_cache(maxsize=4096)
-def _lam_c(nu: float) -> float:
-    """:func:`lubrication.geometry.critical_confinement` of a float, cached: every check of a
-    row needs it, and a table repeats its ν."""
-    return float(critical_confinement(nu))
+class _Batched:
+    """A function of a row's numbers that is computed for many rows at once and asked for one
+    row at a time. ``batch(*columns)`` takes one list per argument and returns one value per
+    argument tuple; :meth:`fill` computes it for the tuples of a chunk of rows not known yet
+    (:func:`check_summary` reads rows in chunks), a call looks one tuple up, or computes it
+    alone as a batch of one: a row alone and a row in a chunk take one code path (numpy's
+    elementwise functions give an element the same value in an array of any length). At
+    most ``size`` values are kept (all are forgotten when one more would exceed it): a few
+    chunks' worth."""
+
+    def __init__(self, batch, size: int = 1 << 13):
+        self.batch, self.size, self.known = batch, size, {}
+
+    def fill(self, *columns) -> None:
+        """Compute the values of the argument tuples ``zip(*columns)`` not known yet. A batch
+        that raises is left to the calls (each row then raises where it would alone)."""
+        keys = [k for k in dict.fromkeys(zip(*columns)) if k not in self.known]
+        if not keys:
+            return
+        if len(self.known) + len(keys) > self.size:
+            self.known.clear()
+        try:
+            values = self.batch(*map(list, zip(*keys)))
+        except (ValueError, ArithmeticError):
+            return
+        self.known.update(zip(keys, values))
+
+    def __call__(self, *args):
+        value = self.known.get(args)
+        if value is None and args not in self.known:
+            if len(self.known) >= self.size:
+                self.known.clear()
+            value = self.known[args] = self.batch(*([a] for a in args))[0]
+        return value
+
+
+def _floats(f):
+    """``f`` of float arrays, as lists of floats (for :class:`_Batched`), with the
+    :class:`OutOfRangeWarning` of a law used outside its range silenced (the checks state the
+    ranges they use)."""
+    def batch(*columns):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", OutOfRangeWarning)
+            out = f(*(np.array(c, dtype=float) for c in columns))
+        if isinstance(out, tuple):
+            return list(zip(*(np.asarray(o, dtype=float).tolist() for o in out)))
+        return np.asarray(out, dtype=float).tolist()
+    return batch
+
+
+#: λc(ν) (:func:`lubrication.geometry.critical_confinement`): every check of a row needs it.
+_lam_c = _Batched(_floats(critical_confinement))
 
 
 @dataclass(frozen=True)
@@ -760,23 +817,54 @@ def _map_ref(nu: float, lam: float, ca_b: float, quantity: str, m) -> Reference 
     return str(m) if isinstance(m, _NoMap) else _map_reference(nu, lam, ca_b, quantity, m)
 
 
+def _answers(nu: list, ratio: list, ca_b: list, maps: list) -> list:
+    """Per point (ν, λ/λc, Ca_B) of map ``maps[i]``: why it lies outside the map
+    (:func:`correlations.solution_map.outside_reason`), else the map's quantities there
+    (:func:`correlations.solution_map.query_map_many`, the points of each map together)."""
+    out = [outside_reason(*p) for p in zip(maps, nu, ratio, ca_b)]
+    for m in set(maps):
+        at = [i for i, k in enumerate(maps) if k is m and not out[i]]
+        for i, q in zip(at, query_map_many([nu[i] for i in at], [ratio[i] for i in at],
+                                           [ca_b[i] for i in at], m, _MAP_QUANTITIES)):
+            out[i] = q.quantities
+    return out
+
+
+#: The quantities of the solution map that the checks compare (besides the shape class).
+_MAP_QUANTITIES = ("V_over_U", "dp_plus_R0", "ell", "film_min")
+#: The solution map's quantities at (ν, λ/λc, Ca_B, map), or why there are none.
+_map_queries = _Batched(_answers)
+
+
+@functools.cache
+def _map_source(methods: tuple) -> str:
+    """The source of a map reference from the methods of its nodes (a few sets of them)."""
+    return f"solution map, {map_method_name(methods)}"
+
+
+@functools.lru_cache(maxsize=64)
+def _inside(nu: float, ratio: float, ca_b: float) -> str:
+    """Where a map reference is taken (the quantities of a row share it)."""
+    return f"inside the map at nu={nu:.4g}, lam/lam_c={ratio:.4g}, Ca_B={ca_b:.4g}"
+
+
 @functools.lru_cache(maxsize=1024)
 def _map_reference(nu: float, lam: float, ca_b: float, quantity: str, m) -> Reference | str:
-    """:func:`map_reference` on the resolved map ``m``, cached as the map's queries are
-    (:func:`correlations.registry.map_query`): rows of a table often repeat their case."""
+    """:func:`map_reference` on the resolved map ``m``, cached: rows of a table often repeat
+    their case."""
     ratio = lam / _lam_c(nu)
-    reason = outside_reason(m, nu, ratio, ca_b)
-    if reason:
-        return f"outside the solution map ({reason})"
-    v = map_query(nu, ratio, ca_b, m).quantities[quantity]
+    answer = _map_queries(nu, ratio, ca_b, m)
+    if isinstance(answer, str):
+        return f"outside the solution map ({answer})"
+    v = answer[quantity]
     if v.value is None:
         return f"solution map: {v.note}"
-    source = f"solution map, {map_method_name(v.methods)}"
-    why = (f"inside the map at nu={nu:.4g}, lam/lam_c={ratio:.4g}, Ca_B={ca_b:.4g}; error = "
-           "interpolation + solver + model error (correlations.solution_map)")
+    source = _map_source(v.methods)
+    where = _inside(nu, ratio, ca_b)
     if isinstance(v.value, str):
-        return Reference(v.value, 0.0, source, why.split("; ")[0] + "; the neighbouring "
-                         "solutions are all of this class")
+        return Reference(v.value, 0.0, source, where + "; the neighbouring solutions are all "
+                         "of this class")
+    why = where + "; error = interpolation + solver + model error (correlations.solution_map)"
     if v.interpolation_error is None:
         return "solution map: interpolation error unknown here"
     error, notes = v.error, []
@@ -784,8 +872,8 @@ def _map_reference(nu: float, lam: float, ca_b: float, quantity: str, m) -> Refe
         error += MAP_UNKNOWN_SOLVER_RTOL * abs(v.value)
         notes.append(f"solver error unknown: {MAP_UNKNOWN_SOLVER_RTOL:g} x value used")
     if v.model_error is None:
-        w = (None if ca_b == DEFAULT_CA_B or outside_reason(m, nu, ratio, DEFAULT_CA_B)
-             else map_query(nu, ratio, DEFAULT_CA_B, m).quantities[quantity])
+        w = None if ca_b == DEFAULT_CA_B else _map_queries(nu, ratio, DEFAULT_CA_B, m)
+        w = None if isinstance(w, str) or w is None else w[quantity]
         if w is None or w.value is None or w.model_error is None:
             return f"solution map: lubrication model error unknown at Ca_B={ca_b:g}"
         stand_in = w.model_error / abs(w.value) * abs(v.value) + abs(v.value - w.value)
@@ -793,6 +881,12 @@ def _map_reference(nu: float, lam: float, ca_b: float, quantity: str, m) -> Refe
         notes.append(f"lubrication model error unknown at Ca_B={ca_b:g}: the one at Ca_B="
                      f"{DEFAULT_CA_B:g} plus the change from there used ({stand_in:.2g})")
     return Reference(v.value, error, source, why, "; ".join(notes))
+
+
+#: eq. asmyp1 (V/U and its slope) and eq. asmyp2 (Δp⁺R0/(ηU)) at (ν, λ).
+_near_critical_laws = _Batched(_floats(lambda nu, lam: (
+    asymptotics.speed_near_critical(nu, lam), asymptotics.speed_slope_near_critical(nu),
+    asymptotics.dp_plus_near_critical(nu, lam))))
 
 
 def near_critical_reference(nu: float, lam: float, quantity: str) -> Reference | str:
@@ -811,19 +905,17 @@ def near_critical_reference(nu: float, lam: float, quantity: str) -> Reference |
     hi = asymptotics.NEAR_CRITICAL_RANGE.bounds[0][2]
     if delta > hi:
         return f"not near lam_c (delta={delta:.3g} > {hi:g})"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", OutOfRangeWarning)
-        if quantity == "V_over_U":
-            value = float(asymptotics.speed_near_critical(nu, lam))
-            slope = float(asymptotics.speed_slope_near_critical(nu))
-            error = abs(slope - 1.0) * delta + NEAR_CRITICAL_SPEED_K * delta**1.5
-            source = "Barakat & Shaqfeh 2018a as Chen et al. 2020 eq. asmyp1"
-            model = f"|slope - 1| delta + {NEAR_CRITICAL_SPEED_K:g} delta^(3/2)"
-        else:
-            value = float(asymptotics.dp_plus_near_critical(nu, lam))
-            error = NEAR_CRITICAL_DP_K * lam / math.sqrt(delta)
-            source = "Barakat & Shaqfeh 2018a as Chen et al. 2020 eq. asmyp2"
-            model = f"{NEAR_CRITICAL_DP_K:g} lam delta^(-1/2)"
+    speed, slope, dp = _near_critical_laws(nu, lam)
+    if quantity == "V_over_U":
+        value = speed
+        error = abs(slope - 1.0) * delta + NEAR_CRITICAL_SPEED_K * delta**1.5
+        source = "Barakat & Shaqfeh 2018a as Chen et al. 2020 eq. asmyp1"
+        model = f"|slope - 1| delta + {NEAR_CRITICAL_SPEED_K:g} delta^(3/2)"
+    else:
+        value = dp
+        error = NEAR_CRITICAL_DP_K * lam / math.sqrt(delta)
+        source = "Barakat & Shaqfeh 2018a as Chen et al. 2020 eq. asmyp2"
+        model = f"{NEAR_CRITICAL_DP_K:g} lam delta^(-1/2)"
     note = "" if 0.6 <= nu <= 0.98 else (f"nu={nu:.3g}: error model measured for 0.6 <= nu <= "
                                           "0.98, extrapolated")
     return Reference(value, error, source, f"delta={delta:.3g} <= {hi:g}; error {model} "
@@ -1136,13 +1228,9 @@ def _bound_checks(row: Row) -> tuple[list[CheckResult], bool]:
     return checks, passes
 
 
-@functools.lru_cache(maxsize=1024)
-def _chen_film_slope(lam: float, delta: float) -> float:
-    """Chen et al.'s Δp⁺R0/(ηU) ≈ (3/2)λℓ/δ per unit ℓ (:func:`dp_plus_film_chen2020`, linear
-    in ℓ), cached per (λ, δ): rows of a table often repeat their case."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", OutOfRangeWarning)
-        return float(dp_plus_film_chen2020(lam, 1.0, delta))
+#: Chen et al.'s Δp⁺R0/(ηU) ≈ (3/2)λℓ/δ per unit ℓ (:func:`dp_plus_film_chen2020`, linear
+#: in ℓ) at (λ, δ).
+_chen_film_slope = _Batched(_floats(lambda lam, delta: dp_plus_film_chen2020(lam, 1.0, delta)))
 
 
 def chen_film_scaling_check(row: Row) -> CheckResult | str:
@@ -1546,6 +1634,25 @@ def _needs_solver(kind: str, nu: float, bem: bool) -> bool:
     return bem and (kind != "vesicle" or nu == 1.0)
 
 
+#: Codes of the kinds of rows in a series (:func:`_series_key`; 0: in none).
+_SERIES_KINDS = {"vesicle": 1, "sphere": 2}
+
+
+def _series_numbers(kind, nu, ca_b) -> np.ndarray:
+    """The series number of each row (−1: in none) from its series key (:func:`_series_key`)
+    as arrays: the kind's code (0: in none), ν and Ca_B (−1: none), all rounded as the key
+    is. Rows of equal keys share a number; a million rows of distinct keys take a few arrays,
+    not a million keys."""
+    order = np.lexsort((ca_b, nu, kind))
+    k, a, b = kind[order], nu[order], ca_b[order]
+    new = np.ones(len(order), dtype=bool)
+    new[1:] = (k[1:] != k[:-1]) | (a[1:] != a[:-1]) | (b[1:] != b[:-1])
+    numbers = np.empty(len(order), dtype=np.int64)
+    numbers[order] = np.cumsum(new) - 1
+    numbers[kind == 0] = -1
+    return numbers
+
+
 def _previous(series, lam) -> np.ndarray:
     """For each row, the index (0-based) of the row it is checked against in its series (-1:
     none), as :func:`trend_checks` pairs them: ``series`` the series number of each row (-1:
@@ -1559,47 +1666,194 @@ def _previous(series, lam) -> np.ndarray:
     return previous
 
 
+class _Part(NamedTuple):
+    """The first pass over one chunk of rows (:func:`_survey_part`): per row its rank (0 pass,
+    1 warn, 2 fail, :data:`_DEFERRED`), its series key (:func:`_series_key`) in three arrays
+    (``series``: the kind's code in :data:`_SERIES_KINDS`, 0 in none; ν; Ca_B, −1 for none),
+    what its series checks need (5 numbers) and its line (0 for none); the vesicle rows
+    without ca_b (their number and the first 10), whether a row is a sphere, a drop or of
+    ν = 1, and the reports that may be listed: ``kept``, a list of ((rank, −n), (row, checks,
+    notes)), the ``keep`` of highest rank among the failing or warning rows and the passing
+    rows among the first ``keep`` of the file (the rows listed in the end are among these
+    unless a series check makes them worse)."""
+    last: int
+    ranks: bytes
+    series: tuple
+    values: array.array
+    lines: array.array
+    default_ca: tuple
+    solid: bool
+    kept: list
+
+
+def _survey_part(chunk: list, bem: bool, m, keep: int | None) -> _Part:
+    """The first pass over ``chunk`` = [(row number, line, cells)]: each row parsed (an
+    :class:`InputError` names the first bad one) and, unless it needs a solver, checked, after
+    the batched functions were filled for all of them (:func:`_prepare`)."""
+    parsed = [(n, line, parse_row(cells, n, _where(n, line))) for n, line, cells in chunk]
+    _prepare([row for _, _, row in parsed], bem, m)
+    kinds, nus, cas = array.array("b"), array.array("d"), array.array("d")
+    values, lines, ranks = array.array("d"), array.array("q"), array.array("b")
+    kept, default_ca, first, solid = [], 0, [], False
+    none = (math.nan,) * 5
+    for n, line, row in parsed:
+        v, kind = row.values, row.kind
+        nu, lam = v.get("nu", 1.0), v["lam"]
+        if kind == "vesicle" and nu < 1.0 and "ca_b" not in v:
+            default_ca += 1
+            if len(first) < 10:
+                first.append(n)
+        solid = solid or kind != "vesicle" or nu == 1.0
+        key = None if kind == "drop" or lam >= _lam_c(nu) else _series_key(kind, v)
+        kinds.append(0 if key is None else _SERIES_KINDS[key[0]])
+        nus.append(0.0 if key is None else key[1])
+        cas.append(-1.0 if key is None or key[2] is None else key[2])
+        values.extend(none if key is None else _series_values(v, row.errors))
+        lines.append(line or 0)
+        if _needs_solver(kind, nu, bem):
+            ranks.append(_DEFERRED)
+            continue
+        checks, notes, _ = _row_checks(row, bem, m)
+        rank = _worst(map(_VERDICT_OF, checks)).rank
+        ranks.append(rank)
+        if rank or keep is None or n <= keep:
+            _offer(kept, keep, (rank, -n), (row, checks, notes))
+    return _Part(parsed[-1][0], ranks.tobytes(), (kinds, nus, cas), values, lines,
+                 (default_ca, first), solid, kept)
+
+
+#: Rows read, parsed and prepared together (:func:`_parts`): enough that the batched
+#: computations cost little per row, few enough that a chunk takes a few MB.
+CHUNK_ROWS = 2048
+#: The arguments (bem, map, keep) of the chunks a worker process checks (:func:`_parts`): set
+#: before the processes are forked, which inherit them (a map is not sent to each).
+_WORKER = None
+
+
+def _workers() -> int:
+    """Processes that check chunks besides the one that reads them: the cores this process
+    may use, at most 2 (none with one core, or where processes cannot be forked)."""
+    if "fork" not in multiprocessing.get_all_start_methods():
+        return 0
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return min(2, cores or 1) if (cores or 1) > 1 else 0
+
+
+def _start_worker() -> None:
+    """A worker process ignores Ctrl-C (the reading process stops it) and collects reference
+    cycles less often: what it inherited is set aside (``gc.freeze``) and a collection waits
+    for 20 000 new objects instead of 700. A chunk makes about a hundred short-lived objects a
+    row and no cycles; the default made the collector a tenth of a worker's time."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    gc.freeze()
+    gc.set_threshold(20_000, *gc.get_threshold()[1:])
+
+
+def _survey_in_worker(chunk: list) -> _Part | None:
+    """:func:`_survey_part` in a worker process; None where it raised (the reading process
+    then checks the chunk itself, which raises the same error at the same row)."""
+    try:
+        return _survey_part(chunk, *_WORKER)
+    except Exception:               # noqa: BLE001 - redone by the reading process, which raises
+        return None
+
+
+def _chunks(rows, progress, size: int = CHUNK_ROWS):
+    """``rows`` (``(row number, line, cells)``) in lists of ``size``; ``progress(n)`` is
+    called as row n is read for every n divisible by :data:`PROGRESS_ROWS`."""
+    rows = iter(rows)
+    while True:
+        chunk = list(itertools.islice(rows, size))
+        if not chunk:
+            return
+        if progress is not None:
+            for n in range(chunk[0][0] + -chunk[0][0] % PROGRESS_ROWS, chunk[-1][0] + 1,
+                           PROGRESS_ROWS):
+                progress(n)
+        yield chunk
+
+
+def _parts(rows, bem: bool, m, keep: int | None, progress=None):
+    """The :class:`_Part` of each chunk of ``rows`` (:func:`_chunks`), in order. The first chunk
+    is checked here; from the second on, with more than one core, worker processes (forked:
+    they share the map read) check the chunks while this one reads the next, a few chunks
+    ahead at most (bounded memory); a chunk whose worker raised, or whose worker died, is
+    checked here. Ctrl-C stops the workers (they ignore it themselves)."""
+    global _WORKER
+    chunks = _chunks(rows, progress)
+    for chunk in itertools.islice(chunks, 1):
+        yield _survey_part(chunk, bem, m, keep)
+    workers = _workers()
+    if not workers:
+        yield from (_survey_part(chunk, bem, m, keep) for chunk in chunks)
+        return
+    _WORKER = (bem, m, keep)
+    pool = concurrent.futures.ProcessPoolExecutor(
+        workers, mp_context=multiprocessing.get_context("fork"), initializer=_start_worker)
+    pending = collections.deque()
+
+    def done() -> _Part:
+        chunk, future = pending.popleft()
+        try:
+            part = future.result()
+        except concurrent.futures.process.BrokenProcessPool:
+            part = None
+        return _survey_part(chunk, bem, m, keep) if part is None else part
+    try:
+        for chunk in chunks:
+            pending.append((chunk, pool.submit(_survey_in_worker, chunk)))
+            if len(pending) > 2 * workers:
+                yield done()
+        while pending:
+            yield done()
+    except BaseException:
+        # stopped (Ctrl-C, an error, the reader gone): the chunks on their way are of no use,
+        # so the workers end now instead of finishing them (terminate_workers from Python
+        # 3.14; before, the executor's own table of its processes)
+        stop = getattr(pool, "terminate_workers", None)
+        for process in [] if stop else list(pool._processes.values()):
+            process.terminate()
+        if stop:
+            stop()
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+        _WORKER = None
+
+
 class _Survey:
-    """The first pass over the rows (:func:`check_summary`): each row parsed (an
-    :class:`InputError` before anything is printed or solved) and, unless it needs a solver,
-    checked; kept per row, in arrays: its rank (0 pass, 1 warn, 2 fail, :data:`_DEFERRED`), its
-    series, what its series checks need (:func:`_series_values`) and its line, about 60 bytes
-    a row. ``kept``: row number -> (row, checks, notes) of the ``keep`` checked rows of highest
-    rank before the series checks (None: all), most of which are listed in the end."""
+    """The first pass over the rows (:func:`check_summary`), chunk by chunk (:func:`_parts`):
+    each row parsed (an :class:`InputError` before anything is printed or solved) and, unless
+    it needs a solver, checked; kept per row, in arrays: its rank (0 pass, 1 warn, 2 fail,
+    :data:`_DEFERRED`), its series, what its series checks need (:func:`_series_values`) and
+    its line, about 60 bytes a row. ``kept``: row number -> (row, checks, notes) of the
+    ``keep`` checked rows of highest rank before the series checks (None: all), most of which
+    are listed in the end."""
 
     def __init__(self, rows, bem: bool, m, keep: int | None, progress=None):
-        keys, ranked, self.solid = {}, [], False
+        ranked, self.solid = [], False
         self.default_ca = [0, []]           # vesicle rows without ca_b: number, the first 10
-        series, self.values = array.array("i"), array.array("d")
-        self.lines, ranks = array.array("q"), array.array("b")
-        none = (math.nan,) * 5
+        series = array.array("b"), array.array("d"), array.array("d")
+        self.values, self.lines, ranks = array.array("d"), array.array("q"), array.array("b")
         n = 0
-        for n, line, cells in rows:
-            if progress is not None and n % PROGRESS_ROWS == 0:
-                progress(n)
-            row = parse_row(cells, n, _where(n, line))
-            v, kind = row.values, row.kind
-            nu, lam = v.get("nu", 1.0), v["lam"]
-            if kind == "vesicle" and nu < 1.0 and "ca_b" not in v:
-                self.default_ca[0] += 1
-                if self.default_ca[0] <= 10:
-                    self.default_ca[1].append(n)
-            self.solid = self.solid or kind != "vesicle" or nu == 1.0
-            key = None if kind == "drop" or lam >= _lam_c(nu) else _series_key(kind, v)
-            series.append(-1 if key is None else keys.setdefault(key, len(keys)))
-            self.values.extend(none if key is None else _series_values(v, row.errors))
-            self.lines.append(line or 0)
-            if _needs_solver(kind, nu, bem):
-                ranks.append(_DEFERRED)
-                continue
-            checks, notes, _ = _row_checks(row, bem, m)
-            rank = _worst(map(_VERDICT_OF, checks)).rank
-            ranks.append(rank)
-            _offer(ranked, keep, (rank, -n), (row, checks, notes))
+        for part in _parts(rows, bem, m, keep, progress):
+            n = part.last
+            count, first = part.default_ca
+            self.default_ca[0] += count
+            self.default_ca[1] += first[:10 - len(self.default_ca[1])]
+            self.solid = self.solid or part.solid
+            for whole, chunk in zip(series, part.series):
+                whole.extend(chunk)
+            self.values.extend(part.values)
+            self.lines.extend(part.lines)
+            ranks.frombytes(part.ranks)
+            for key, item in part.kept:
+                _offer(ranked, keep, key, item)
         self.n = n
         self.kept = {-key[1]: item for key, item in ranked}
         values = np.frombuffer(self.values, dtype=float).reshape(n, 5)
-        self.previous = _previous(np.frombuffer(series, dtype=np.intc), values[:, 0])
+        self.previous = _previous(_series_numbers(*(np.frombuffer(a, dtype=a.typecode)
+                                                    for a in series)), values[:, 0])
         self.rank = np.frombuffer(ranks, dtype=np.int8).astype(np.int64)
         b = np.flatnonzero((self.previous >= 0) & (self.rank != _DEFERRED))
         a = self.previous[b]
@@ -1616,6 +1870,36 @@ class _Survey:
         return _trend_pair(tuple(self.values[5 * a:5 * a + 5]),
                            _where(a + 1, self.lines[a] or None),
                            tuple(self.values[5 * n - 5:5 * n]))
+
+
+def _prepare(rows: list, bem: bool, m) -> None:
+    """Fill the batched functions (:class:`_Batched`) for the checks of ``rows``: λc of every
+    row, and for the vesicle rows that fit the tube and need no solver the map's quantities
+    where the row lies inside the map (``m`` the resolved map), else the near-critical laws
+    where δ ≤ 0.1, and Chen et al.'s film scaling where a length is given and 0.02 ≤ δ ≤ 0.1:
+    the values :func:`_row_checks` then asks of them one row at a time."""
+    _lam_c.fill([r.values.get("nu", 1.0) for r in rows])
+    vesicles = []
+    for r in rows:
+        v = r.values
+        nu, lam = v.get("nu", 1.0), v["lam"]
+        if r.kind == "vesicle" and nu < 1.0 and lam < _lam_c(nu):
+            vesicles.append((nu, lam, lam / _lam_c(nu), v.get("ca_b", DEFAULT_CA_B), v))
+    if not isinstance(m, _NoMap):
+        _map_queries.fill(*zip(*[(nu, ratio, ca_b, m) for nu, _, ratio, ca_b, _ in vesicles]))
+    near, film = [], []
+    hi = asymptotics.NEAR_CRITICAL_RANGE.bounds[0][2]
+    lo_film, hi_film = CHEN_FILM_SCALING_RANGE
+    for nu, lam, ratio, ca_b, v in vesicles:
+        delta = 1.0 - lam / _lam_c(nu)
+        if delta <= hi and (isinstance(m, _NoMap)
+                            or isinstance(_map_queries(nu, ratio, ca_b, m), str)):
+            near.append((nu, lam))
+        ell = v.get("ell")
+        if ell is not None and ell > 0 and lo_film <= delta <= hi_film:
+            film.append((lam, delta))
+    for batched, points in ((_near_critical_laws, near), (_chen_film_slope, film)):
+        batched.fill(*zip(*points))
 
 
 def _offer(ranked: list, keep: int | None, key: tuple, item) -> None:
@@ -1641,19 +1925,20 @@ def check_summary(rows_or_path, *, bem: bool = True, solution_map=None,
     first, then those with warnings, then passing ones, each in file order (listed in file
     order).
 
-    The first pass reads, converts and checks each row as it comes (a CSV file as a stream,
-    :func:`correlations.files.open_text`; a JSON file whole, at most
-    :data:`MAX_JSON_ROWS_BYTES`) and keeps of it only its verdict and what the series checks
-    need (λ, V/U, Δp⁺R0/(ηU), their uncertainties: about 60 bytes a row), besides the reports
-    of the ``keep`` worst rows so far. A row that needs a solver (a BEM reference of a sphere or
-    a drop) waits, so that bad input anywhere raises :class:`InputError` before any solver
-    runs. Then the series checks of all rows are made together, which completes every verdict.
+    The first pass reads, converts and checks the rows as they come, in chunks of
+    :data:`CHUNK_ROWS` (a CSV file as a stream, :func:`correlations.files.open_text`; a JSON
+    file whole, at most :data:`MAX_JSON_ROWS_BYTES`; the chunks checked in worker processes
+    where there are cores for them, :func:`_parts`) and keeps of each row only its verdict and
+    what the series checks need (λ, V/U, Δp⁺R0/(ηU), their uncertainties: about 60 bytes a
+    row), besides the reports of the ``keep`` worst rows so far. A row that needs a solver (a
+    BEM reference of a sphere or a drop) waits, so that bad input anywhere raises
+    :class:`InputError` before any solver runs. Then the series checks of all rows are made together, which completes every verdict.
     A second pass, only if needed, reads the rows again up to the last one it needs: those to
     be listed whose report was not kept (a series check made them worse) and the rows that
     need a solver (a second or so per (λ, Ca), cached), each checked once.
 
     Parameters and errors as :func:`check_results`; ``keep`` >= 0 or None; ``progress(n)``, if
-    given, is called in the first pass after every :data:`PROGRESS_ROWS` rows. A file that
+    given, is called in the first pass after every :data:`PROGRESS_ROWS` rows read. A file that
     changes between the two passes raises :class:`InputError`.
     """
     if keep is not None and keep < 0:

@@ -17,11 +17,12 @@ Three layers, in the order of the data's life:
    (format :data:`FORMAT`): the grid, provenance, column units, one list per column (no shapes),
    the holes (failed or missing points with their reasons) and the leave-one-out interpolation
    errors of every node, measured at pack time.
-3. **Query** (:func:`query_map`): every quantity at (ν, λ/λc, Ca_B) with its value, an
-   interpolation-error estimate, the solver's own error, the BEM–lubrication model error where
-   lubrication points are used, and the methods of the neighbouring points. Which nodes enter
-   with which weights (the stencil) is found once per query for all quantities
-   (:class:`SolutionMap`).
+3. **Query** (:func:`query_map`, :func:`query_map_many` for many points at once): every
+   quantity at (ν, λ/λc, Ca_B) with its value, an interpolation-error estimate, the solver's
+   own error, the BEM–lubrication model error where lubrication points are used, and the
+   methods of the neighbouring points. Which nodes enter (the stencil) is found once per
+   position in the grid for all quantities and all points there, their weights per point
+   (:class:`SolutionMap`); a query at one point is a query of many with one point.
 
 Which method a node uses (the rule)
 -----------------------------------
@@ -128,12 +129,16 @@ from __future__ import annotations
 
 import bisect
 import functools
+import itertools
 import json
 import math
 import operator
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
 
 from lubrication.checks import (OUTPUT_BOUNDS, CannotPassError, InvalidParameterError, as_finite,
                                 check_output, check_positive)
@@ -144,7 +149,7 @@ from .files import check_input_file, expect, read_json
 
 __all__ = ["FORMAT", "POINT_FORMAT", "POINT_GLOB", "QUANTITIES", "TRANSFORMS", "DEFAULT_MAP",
            "CA_B_CLAMP_MAX", "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
-           "read_points", "read_build", "pack_map", "load_map", "query_map"]
+           "read_points", "read_build", "pack_map", "load_map", "query_map", "query_map_many"]
 
 #: identifiers of the packed file and of a stored point (checked on load)
 FORMAT, FORMAT_VERSION = "vesicle-tube solution map", 1
@@ -444,28 +449,11 @@ def _locate(coords, x) -> tuple[int, range]:
     return pos, range(lo, hi)
 
 
-def _lagrange(xs, x) -> list[float]:
-    """Lagrange weights of the nodes ``xs`` at ``x`` (exactly 1 and 0s on a node)."""
-    w = []
-    for i, xi in enumerate(xs):
-        p = 1.0
-        for j, xj in enumerate(xs):
-            if j != i:
-                p *= (x - xj) / (xi - xj)
-        w.append(p)
-    return w
-
-
-@dataclass
-class _Part:
-    """A partial interpolation: value y (transformed), its error parts in y, the leaf rows
-    used and notes."""
-    y: float
-    interp: float | None
-    solver: float | None
-    model: float | None
-    rows: frozenset
-    notes: tuple = ()
+#: The note of a value whose error lacks parts, by which parts (interpolation, solver, model)
+#: are unknown.
+_UNKNOWN = {unknown: "error without the unknown " + ", ".join(
+    name for name, u in zip(("interpolation", "solver", "model"), unknown) if u) + " part"
+    for unknown in itertools.product((False, True), repeat=3)}
 
 
 def _add(a, b):
@@ -487,28 +475,19 @@ class _Leaf:
 
 class _Stencil:
     """An interpolation along one axis without its values (the same for every quantity): the
-    Lagrange weights of the nodes used, what each node gives (an inner :class:`_Stencil` or a
-    :class:`_Leaf`), the rows whose leave-one-out errors on this axis enter its interpolation
-    error (None: no error bar is formed, as in a LOO extrapolation), and every row used with
-    their kinds. ``leaf_nodes``: the node indices of the parts when all are leaves (their
-    values are then looked up in one go), else None."""
-    __slots__ = ("axis", "weights", "abs_weights", "parts", "corners", "rows", "kinds",
-                 "leaf_nodes")
-    node = None                        # a leaf's is its index: the sums tell them apart by it
+    coordinates of the nodes used (ascending; their Lagrange weights at the query's coordinate
+    are taken when the stencil is evaluated), what each node gives (an inner
+    :class:`_Stencil` or a :class:`_Leaf`), the rows whose leave-one-out errors on this axis
+    enter its interpolation error (None: no error bar is formed, as in a LOO extrapolation),
+    and every row used with their kinds."""
+    __slots__ = ("axis", "coords", "parts", "corners", "rows", "kinds")
+    node = None                        # a leaf's is its index: the plan tells them apart by it
 
-    def __init__(self, axis: str, weights: list, parts: list, rows: frozenset,
+    def __init__(self, axis: str, coords: list, parts: list, rows: frozenset,
                  corners: tuple | None):
-        self.axis, self.weights, self.parts, self.rows, self.corners = (axis, weights, parts,
-                                                                        rows, corners)
-        self.abs_weights = list(map(abs, weights))
+        self.axis, self.coords, self.parts, self.rows, self.corners = (axis, coords, parts,
+                                                                       rows, corners)
         self.kinds = frozenset().union(*[p.kinds for p in parts])
-        nodes = [p.node for p in parts]
-        self.leaf_nodes = None if None in nodes else nodes
-
-    def leaves(self):
-        """The leaves, in the order their values are summed."""
-        for p in self.parts:
-            yield from ((p,) if isinstance(p, _Leaf) else p.leaves())
 
 
 @dataclass
@@ -516,95 +495,180 @@ class _Table:
     """Quantity ``q`` at the grid nodes in its interpolated variable (in its logarithm if
     ``log``), filled one (ν, Ca_B) line at a time as queries reach them (a query uses a few of
     the map's lines). By node index: ``y`` the value scaled with the node's own δ, ``solver``
-    and ``model`` its errors in y (None where unknown, at a hole and on lines not filled);
-    ``failed`` {node: reason} where the node has a point but no y (missing, or not positive
-    where ``log``); ``notes`` {node: notes} where there are any; ``lines`` the lines filled;
-    ``has_solver`` whether a node of these lines has a solver error."""
+    and ``model`` its errors in y (NaN where unknown, at a hole and on lines not filled; one
+    more entry, 0, for the padding of a :class:`_Plan`); ``failed`` {node: reason} where the
+    node has a point but no y (missing, or not positive where ``log``); ``notes`` {node: notes}
+    where there are any; ``lines`` the lines filled; ``has_solver`` whether a node of these
+    lines has a solver error. ``y``, ``solver`` and ``model`` are the columns ``column``,
+    ``column + 1`` and ``column + 2`` of the map's node values (:class:`SolutionMap`), which
+    the plans of many quantities read at once."""
     q: str
     log: bool
-    y: list
-    solver: list
-    model: list
+    column: int
+    y: np.ndarray
+    solver: np.ndarray
+    model: np.ndarray
     failed: dict = field(default_factory=dict)
     notes: dict = field(default_factory=dict)
     lines: set = field(default_factory=set)
     has_solver: bool = False
 
 
-_mul = operator.mul          # (a name of this module: looked up faster in the hot path)
+# A stencil flattened (:class:`_Plan`): the tensor product of at most three nodes along ν,
+# three along Ca_B under each and three along λ under each of those, in slots: slot 0 the ν
+# axis, slots 1-3 the Ca_B axis under its nodes, slots 4-12 the λ axis under theirs
+# (4 + 3 i_ν + i_Ca), the 27 leaves 9 i_ν + 3 i_Ca + i_λ. A slot of fewer than three nodes has
+# the padding coordinates _FAR (second node) and -_FAR (third): far beyond any coordinate, so
+# that (t - x_j)/(x_i - x_j) is exactly 1 for a padding x_j and the Lagrange weights of the
+# nodes that exist are exactly theirs (1 for a single node: an axis on which the query sits on
+# a node); the padding parts get tiny weights and the padding node, whose values are 0.
+_PAD = -1                        # the padding node: the last entry of a table (0)
+_FAR = 1e300
+_SLOT_AXIS = [0] + [1] * 3 + [2] * 9     # the coordinate of each slot: ν, log Ca_B, x
+#: Most plans a map keeps (about 2 kB each; random points over the shipped map make about
+#: 6000); beyond, a query starts afresh.
+_MAX_PLANS = 50_000
 
 
-def _accumulate(weights, errors) -> float | None:
-    """Σ w_i e_i added term by term from 0.0; None if an e_i is None (unknown); 0.0 without
-    adding when every e_i is 0 (the model error of BEM nodes)."""
-    if None in errors:
-        return None
-    if not any(errors):
-        return 0.0
-    return functools.reduce(operator.add, map(_mul, weights, errors), 0.0)
+class _NoPlan(NamedTuple):
+    """Where a point has no stencil: the reason, and the node indices looked at and the lines
+    reached while finding that out."""
+    reason: str
+    looked: frozenset
+    reached: frozenset
 
 
-# The sums along a stencil (a _Stencil, or a _Leaf when the query sits on a node), one function
-# per kind of sum, each as the interpolation defines it, term by term in the nodes' order. They
-# are the hot path of a query (eight quantities a query, about a dozen stencil nodes each), so
-# they sum with ``map`` (loops in C) and stop at the first unknown part.
+class _Plan:
+    """A stencil (:meth:`SolutionMap._stencil`) flattened into the slots above, without the
+    query's coordinates: the leaves' node indices, the coordinates of each slot's nodes (the
+    Lagrange weights are taken at each query), the interpolation-error rows of each slot
+    (``terms``: (axis, corner rows or None) where the slot interpolates, else None), whether
+    every node is a BEM point, the rows used (sorted) and their methods, the node indices
+    looked at and the (ν, Ca_B) lines reached while finding it, and the leaves in summing
+    order; ``termed`` the quantities whose terms are worked out (:meth:`SolutionMap._terms`).
+    Stencils found at points whose discrete position in the grid is the same
+    (:meth:`SolutionMap._codes`) are the same but for the weights: a plan serves them all."""
+    __slots__ = ("bem_only", "coords", "index", "leaves", "looked", "methods", "nodes", "reached",
+                 "rows", "termed", "terms")
 
-def _sum_values(st, y) -> float:
-    """y = Σ w_i y_i along each axis of stencil ``st``, from the nodes' ``y`` (by node)."""
-    if st.node is not None:
-        return y[st.node]
-    if st.leaf_nodes is not None:
-        return sum(map(_mul, st.weights, map(y.__getitem__, st.leaf_nodes)))
-    return sum(map(_mul, st.weights, [_sum_values(p, y) for p in st.parts]))
+    def __init__(self, st, looked, reached, method_of):
+        self.nodes = [_PAD] * 27
+        self.coords, self.terms = [[0.0, _FAR, -_FAR] for _ in range(13)], [None] * 13
+
+        def take(p, axis: str, slot: int) -> list:
+            """The parts of ``p`` along ``axis``, put in ``slot``."""
+            if isinstance(p, _Stencil) and p.axis == axis:
+                self.coords[slot][:len(p.parts)] = p.coords
+                self.terms[slot] = (axis, p.corners)
+                return p.parts
+            return [p]                     # on a node of this axis: the part itself
+
+        leaves = []
+        for i, p in enumerate(take(st, "nu", 0)):
+            for j, q in enumerate(take(p, "ca", 1 + i)):
+                for k, leaf in enumerate(take(q, "lam", 4 + 3 * i + j)):
+                    self.nodes[9 * i + 3 * j + k] = leaf.node
+                    leaves.append(leaf.node)
+        self.leaves = tuple(leaves)
+        self.rows = tuple(sorted(st.rows))
+        self.methods = tuple(sorted({method_of[r] for r in st.rows}))
+        self.bem_only = all(method == "bem" for method, _ in st.kinds)
+        self.looked, self.reached, self.index, self.termed = looked, reached, None, set()
 
 
-def _sum_interpolation(st, loo) -> float | None:
-    """Interpolation error of stencil ``st``: along each axis Σ |w_i| e_i (0 at a node) plus
-    the largest LOO error ``loo[axis][row]`` of its corner rows over :data:`LOO_RATIO`; None
-    where one of those LOO errors is unknown or no error bar is formed (LOO)."""
-    if st.node is not None:
-        return 0.0
-    if st.corners is None:
-        return None
-    errors = list(map(loo[st.axis].__getitem__, st.corners))
-    if None in errors:
-        return None
-    if st.leaf_nodes is not None:
-        inner = 0.0                    # Σ |w_i| 0 over the nodes, without adding
-    else:
-        parts = [_sum_interpolation(p, loo) for p in st.parts]
-        if None in parts:
-            return None
-        inner = sum(map(_mul, st.abs_weights, parts))
-    return inner + max(errors) / LOO_RATIO
+_OTHERS = np.array([[1, 2], [0, 2], [0, 1]])      # the nodes j ≠ i of three, in order
 
 
-def _sum_errors(st, e) -> float | None:
-    """Solver or model error of stencil ``st`` from the nodes' ``e`` (by node): along each
-    axis Σ |w_i| e_i added term by term from 0 (:func:`_accumulate`); None if a node's is."""
-    if st.node is not None:
-        return e[st.node]
-    if st.leaf_nodes is not None:
-        return _accumulate(st.abs_weights, list(map(e.__getitem__, st.leaf_nodes)))
-    parts = []
-    for p in st.parts:
-        parts.append(_sum_errors(p, e))
-        if parts[-1] is None:
-            return None
-    return _accumulate(st.abs_weights, parts)
+def _weights(coords, t):
+    """Lagrange weights (..., 3) at ``t`` (...) of the three nodes ``coords`` (..., 3):
+    w_i = Π_{j≠i} (t − x_j)/(x_i − x_j), factor by factor in the order of j."""
+    xj = coords[..., _OTHERS]                                     # (..., 3, 2)
+    f = (t[..., None, None] - xj) / (coords[..., None] - xj)
+    return f[..., 0] * f[..., 1]
+
+
+def _dot(w, v):
+    """Σ_i w_i v_i over the nodes (the second last axis, three terms), in the nodes' order."""
+    return w[..., 0, :] * v[..., 0, :] + w[..., 1, :] * v[..., 1, :] + w[..., 2, :] * v[..., 2, :]
+
+
+def _evaluate(plans, at, values, tables: list, terms) -> tuple:
+    """(y, interpolation error, solver error, model error) of K quantities at N points (arrays
+    (N, K), NaN where unknown) by their plans: ``plans`` (nodes (N, 27), coords (N, 13, 3),
+    bem_only (N,)), ``at`` (N, 3) the points' ν, log Ca_B and x = δ^½, ``values`` the map's
+    node values (column 0 zeros), ``tables`` the quantities' :class:`_Table` (their columns),
+    ``terms`` (N, 13, K) the interpolation-error term of each slot (:meth:`SolutionMap._terms`).
+
+    Each is summed as the interpolation defines it, term by term in the nodes' order, along
+    λ, then Ca_B, then ν: y = Σ w_i y_i; the interpolation error Σ |w_i| e_i (0 at the leaves)
+    plus the slot's largest leave-one-out error of its corner rows over :data:`LOO_RATIO`; the
+    solver and model errors Σ |w_i| e_i (the model error 0 where every node is a BEM point, the
+    solver error unknown where no node of the lines reached has one). The 4K sums are taken
+    together."""
+    nodes, coords, bem_only = plans
+    n, k = len(nodes), len(tables)
+    w = _weights(coords, at[:, _SLOT_AXIS])[..., None]
+    w = np.where(np.arange(4 * k) < k, w, np.abs(w))             # w for y, |w| for the errors
+    columns = [t.column for t in tables]
+    v = values[nodes[..., None], columns + [0] * k + [c + 1 for c in columns]
+               + [c + 2 for c in columns]]                         # (N, 27, 4K)
+    add = np.zeros((n, 13, 4 * k))
+    add[..., k:2 * k] = terms
+    v = _dot(w[:, 4:], v.reshape(n, 9, 3, -1)) + add[:, 4:]
+    v = _dot(w[:, 1:4], v.reshape(n, 3, 3, -1)) + add[:, 1:4]
+    v = _dot(w[:, 0], v) + add[:, 0]
+    y, interp, solver, model = v[:, :k], v[:, k:2 * k], v[:, 2 * k:3 * k], v[:, 3 * k:]
+    solver[:, [not t.has_solver for t in tables]] = np.nan
+    model[bem_only] = 0.0
+    return y, interp, solver, model
+
+
+class _Plans:
+    """The plans of a map in arrays, by index (grown as plans are added), for the arithmetic
+    of many points at once; ``terms``: the interpolation-error term of each slot of each plan
+    for each quantity of :data:`QUANTITIES` (their order), where worked out
+    (:meth:`SolutionMap._terms`)."""
+
+    def __init__(self):
+        self.plans = []
+        self.nodes = np.empty((0, 27), dtype=np.intp)
+        self.coords = np.empty((0, 13, 3))
+        self.bem_only = np.empty(0, dtype=bool)
+        self.terms = np.empty((0, 13, len(QUANTITIES)))
+
+    def add(self, plan: _Plan) -> _Plan:
+        """Store ``plan`` (its terms are worked out when asked, :meth:`SolutionMap._terms`);
+        returns it, indexed."""
+        n = len(self.plans)
+        if n == len(self.bem_only):        # full: double the arrays
+            self.nodes, self.coords, self.bem_only, self.terms = (
+                np.concatenate([a, np.empty_like(a, shape=(max(n, 16),) + a.shape[1:])])
+                for a in (self.nodes, self.coords, self.bem_only, self.terms))
+        self.nodes[n], self.coords[n], self.bem_only[n] = plan.nodes, plan.coords, plan.bem_only
+        plan.index = n
+        plan.nodes = plan.coords = None         # held here from now on
+        self.plans.append(plan)
+        return plan
+
+    def arrays(self, index):
+        """(nodes, coords, bem_only) of the plans ``index``."""
+        return self.nodes[index], self.coords[index], self.bem_only[index]
 
 
 class SolutionMap:
     """A packed solution map in memory, indexed for queries (see :func:`load_map`).
 
-    A query is answered in two steps. :meth:`_stencil` finds, once for all quantities, which
-    nodes are interpolated with which weights (the rule, the third node of each axis, the holes
-    and the corners of the grid cell): that depends on which nodes exist and on their method
-    and shape class, not on the quantity. :meth:`_evaluate` then does the arithmetic for each
-    quantity from per-map tables of the nodes' values (:meth:`_table`) and LOO errors
-    (:meth:`_loo_table`), in the order the interpolation defines. A quantity that has no
-    interpolated value at some node (a value that is not positive where its logarithm is
-    interpolated) gets a stencil of its own when the shared one looked at such a node."""
+    Queries are answered in two steps, for many points at once (:meth:`quantities_many`).
+    :meth:`_stencil` finds, once for all quantities, which nodes are interpolated (the rule,
+    the third node of each axis, the holes and the corners of the grid cell): that depends on
+    which nodes exist and on their method and shape class, not on the quantity, and on the
+    point only through its position in the grid (:meth:`_codes`), so it is found once per
+    position and kept flattened (:class:`_Plan`). :func:`_evaluate` then does the arithmetic
+    of all points and quantities at once from the map's table of the nodes' values
+    (:meth:`_table`) and the plans' LOO terms (:meth:`_terms`), with each point's Lagrange
+    weights, in the order the interpolation defines. A quantity that has no interpolated value
+    at some node (a value that is not positive where its logarithm is interpolated) gets a
+    stencil of its own when the shared one looked at such a node."""
 
     def __init__(self, data: dict, source: str = ""):
         self.source = source
@@ -668,6 +732,29 @@ class SolutionMap:
         self._interior = {axis: self._interior_rows(axis) for axis in _AXES}
         self._tables = {}        # (q, log) -> _table(q, log)
         self._loos = {}          # q -> _loo_table(q)
+        self._q_index = {q: i for i, q in enumerate(QUANTITIES)}
+        # For the plans (:meth:`_codes`): per position g of x among the nodes xs (bisect), the
+        # pairs of nodes (k above, k below) whose distances to x choose the third node of a
+        # line; the plans made so far, by code (:meth:`_plans_at`).
+        pairs = [sorted({(line[p + 1], line[p - 2]) for by_ca in ks for line in by_ca
+                         for p in [bisect.bisect_left(line, g)] if 2 <= p and p + 1 < len(line)})
+                 for g in range(len(self.xs) + 1)]
+        width = max(map(len, pairs))
+        axes = (self.nus, self._cs, self.xs, self.cas, self.ratios)
+        size = np.array([len(a) for a in axes])
+        # states: 3 (pos) + on-node below/at; times 2 where the third node is chosen (ν, Ca_B)
+        states = (3 * size + 3) * [2, 2, 1, 1, 1]
+        self._code_tables = (
+            np.array([list(a) + [math.inf] * (size.max() + 2 - len(a)) for a in axes]), size,
+            np.array([math.prod(states[i + 1:]) for i in range(5)], dtype=np.int64),
+            np.array([p + [(0, 0)] * (width - len(p)) for p in pairs], dtype=np.intp
+                     ).reshape(len(pairs), width, 2))
+        self._plans, self._plan_of, self._shapes = _Plans(), {}, {}
+        # the values of the nodes: column 0 zeros, then y, solver and model error of each
+        # quantity in its variable and its logarithm (the :class:`_Table` columns); the last
+        # row is the padding node's (0)
+        self._values = np.full((len(self._leaves) + 1, 1 + 6 * len(QUANTITIES)), np.nan)
+        self._values[:, 0] = self._values[_PAD] = 0.0
 
     # ---------------------------------------------------------------- nodes and the rule
     def node(self, nu: float, lam_ratio: float, ca_b: float) -> tuple[int | None, str]:
@@ -769,8 +856,9 @@ class SolutionMap:
         indices i_nu * len(cas) + i_ca)."""
         table = self._tables.get((q, log))
         if table is None:
-            n = len(self._leaves)
-            table = self._tables[q, log] = _Table(q, log, [None] * n, [None] * n, [None] * n)
+            k = 1 + 3 * (2 * self._q_index[q] + log)
+            v = self._values
+            table = self._tables[q, log] = _Table(q, log, k, v[:, k], v[:, k + 1], v[:, k + 2])
         if not lines <= table.lines:
             for line in lines - table.lines:
                 self._fill(table, line)
@@ -793,7 +881,9 @@ class SolutionMap:
                 continue
             model = self._model_error(leaf.row, q, log, leaf.line)
             solver = self._solver_error(leaf.row, q, log, leaf.ratio)
-            table.y[leaf.node], table.solver[leaf.node], table.model[leaf.node] = y, solver, model
+            table.y[leaf.node] = y
+            table.solver[leaf.node] = np.nan if solver is None else solver
+            table.model[leaf.node] = np.nan if model is None else model
             table.has_solver = table.has_solver or solver is not None
             if model is None:
                 table.notes[leaf.node] = (
@@ -866,7 +956,7 @@ class SolutionMap:
             at = rows & corners
             interior = self._interior[axis]
             use = tuple([r for r in at if interior[r]] or at or rows)
-        return _Stencil(axis, _lagrange([coords[j] for j in order], x), ps, rows, use)
+        return _Stencil(axis, [coords[j] for j in order], ps, rows, use)
 
     def _stencil(self, nu, x, c, corners=None, exclude=None, table=None) -> tuple:
         """The stencil at (nu, x = δ^½, c = log Ca_B), tensor-product fashion (λ first, then
@@ -912,107 +1002,237 @@ class SolutionMap:
         the node tables (None for k None)."""
         return None if k is None else (i_nu * len(self.xs) + k) * len(self.cas) + i_ca
 
-    # ---------------------------------------------------------------- the arithmetic
-    def _evaluate(self, st, table: _Table, loo: dict) -> tuple:
-        """(y, interpolation error, solver error, model error) of one quantity by stencil
-        ``st`` from its :class:`_Table` and LOO errors ``loo`` (:meth:`_loo_table`): each summed
-        along the stencil on its own (:func:`_sum_values`, :func:`_sum_interpolation`,
-        :func:`_sum_errors`); the errors in y, None where unknown. Without any solver error
-        on the lines reached the solver error is unknown, and on BEM nodes only the model
-        error is 0 (each node's is), both without summing."""
-        bem_only = all(method == "bem" for method, _ in st.kinds)
-        return (_sum_values(st, table.y), _sum_interpolation(st, loo),
-                _sum_errors(st, table.solver) if table.has_solver else None,
-                0.0 if bem_only else _sum_errors(st, table.model))
+    # ---------------------------------------------------------------- plans
+    def _codes(self, nu, x, c, ca, r) -> np.ndarray:
+        """An integer per point (arrays ν, x = δ^½, c = log Ca_B as the stencil takes them,
+        ``ca`` and ``r`` = λ/λc as the corners take them) that says where it lies in the grid:
+        on each axis the node interval (bisect) and the node it sits on (:func:`_locate`),
+        which third node is the nearer where the stencil compares them (ν, Ca_B, and on every
+        line at this x), and the same intervals of Ca_B and λ/λc for the corners
+        (:meth:`_corners`). Every choice :meth:`_stencil` makes is fixed by these: points of
+        one code have one stencil but for the weights (one :class:`_Plan`)."""
+        axes, size, place, pairs = self._code_tables
+        t = np.array((nu, c, x, ca, r), dtype=float)[..., None]     # (5, N, 1)
+        pos = (axes[:, None, :] < t).sum(-1, keepdims=True)           # bisect_left
+        tol = _ON_NODE * np.maximum(1.0, np.abs(t))
+        near = np.take_along_axis(axes, (pos + [-2, -1, 0, 1]).clip(0).reshape(5, -1),
+                                  axis=1).reshape(5, -1, 4) - t      # nodes pos-2 ... pos+1
+        state = 3 * pos[..., 0] + (pos[..., 0] > 0) * (np.abs(near[..., 1]) <= tol[..., 0]) \
+            + 2 * (np.abs(near[..., 2]) <= tol[..., 0])
+        third = ((pos[..., 0] >= 2) & (pos[..., 0] + 1 < size[:, None])
+                 & (np.abs(near[..., 3]) < np.abs(near[..., 0])))
+        state[:2] = 2 * state[:2] + third[:2]                         # ν and Ca_B choose
+        # the third node on every line at this x: nearer of each pair (up, down)
+        up, down = pairs[pos[2, :, 0]].T                              # (P, N) node indices
+        xs, x = axes[2], t[2, :, 0]
+        nearer = (np.abs(xs[up] - x) < np.abs(xs[down] - x)).T @ (1 << np.arange(len(up)))
+        return place @ state * (1 << len(up)) + nearer
 
-    def _interpolate(self, q, log, nu, x, c, corners=None, exclude=None, shared=None):
-        """Quantity ``q`` (transformed; in its logarithm if ``log``) at (nu, x = δ^½,
-        c = log Ca_B) as a _Part, or the reason there is none. ``shared``: the answer of
-        :meth:`_stencil` at this point with no failed node, used unless ``q`` fails at one of
-        the nodes it looked at (then ``q`` gets its own: with none of them failed it would
-        take the same steps to the same stencil)."""
-        table = self._table(q, log, frozenset() if shared is None else shared[2])
-        if shared is None or (table.failed and not table.failed.keys().isdisjoint(shared[1])):
-            shared = self._stencil(nu, x, c, corners, exclude, table)
-        st, notes = shared[0], table.notes
+    def _plans_at(self, at, r, ca, codes, corners: bool, table=None) -> list:
+        """Per point (rows of ``at``: ν, c = log Ca_B, x = δ^½; ``r``, ``ca``, ``codes`` as
+        :meth:`_codes` takes and gives them) its :class:`_Plan`, or a :class:`_NoPlan` with the
+        reason it has none; with the corners of its cell (``corners``: an error bar) or
+        without; with ``table``, that quantity's failed nodes count as holes. A plan is found
+        by :meth:`_stencil` at the first point of its code and kept for the others."""
+        tag = (corners, None if table is None else (table.q, table.log))
+        found, out = {}, []
+        for i, code in enumerate(codes.tolist()):
+            plan = found.get(code)
+            if plan is None:
+                plan = found[code] = self._plan_of.get((code, tag))
+            if plan is None:
+                nu, c, x = at[i].tolist()
+                cells = self._corners(nu, float(ca[i]), float(r[i])) if corners else None
+                st, looked, reached = self._stencil(nu, x, c, cells, table=table)
+                plan = found[code] = self._plan_of[code, tag] = (
+                    _NoPlan(st, looked, reached) if isinstance(st, str) else
+                    self._plans.add(_Plan(st, looked, reached, self.columns["method"])))
+            out.append(plan)
+        return out
+
+    def _terms(self, plans: list, names: list) -> np.ndarray:
+        """The interpolation-error terms (N, 13, K) of the stored ``plans`` for the quantities
+        ``names``: per slot the largest LOO error along the slot's axis of its corner rows over
+        :data:`LOO_RATIO` (NaN where one is unknown or no error bar is formed; 0 where the
+        slot does not interpolate), worked out for a plan and a quantity when first asked."""
+        columns = [self._q_index[q] for q in names]
+        store = self._plans
+        for plan in plans:
+            if not plan.termed.issuperset(names):
+                for q, k in zip(names, columns):
+                    loo = self._loo_table(q)
+                    for slot, term in enumerate(plan.terms):
+                        errors = (None if term is None or term[1] is None
+                                  else [loo[term[0]][r] for r in term[1]])
+                        store.terms[plan.index, slot, k] = (
+                            0.0 if term is None else math.nan if errors is None
+                            or None in errors else max(errors) / LOO_RATIO)
+                plan.termed.update(names)
+        return store.terms[np.array([p.index for p in plans], dtype=np.intp)][..., columns]
+
+    # ---------------------------------------------------------------- the arithmetic
+    def _parts(self, keys: list, at, r, ca, codes, shared: list, corners: bool) -> dict:
+        """Quantities ``keys`` = [(q, log)] (transformed; in the logarithm where ``log``) at the
+        points ``at``: {(q, log): per point (y, interpolation, solver, model error (in y, None
+        where unknown), the :class:`_Plan` used, the notes of its leaves), or the reason there
+        is none}.
+        ``shared``: the points' plans (:meth:`_plans_at`) with no failed node, used unless q
+        fails at one of the nodes a plan looked at (then the point gets q's own: with none of
+        them failed the stencil would take the same steps to the same plan). Quantities of the
+        same plans are summed together."""
+        lines = frozenset().union(*{p.reached for p in shared})
+        groups = {}                      # id of a list of plans -> (the list, its keys)
+        for q, log in keys:
+            table, plans = self._table(q, log, lines), shared
+            own = ([i for i, p in enumerate(shared)
+                    if not table.failed.keys().isdisjoint(p.looked)] if table.failed else [])
+            if own:
+                plans = list(shared)
+                for i, p in zip(own, self._plans_at(at[own], r[own], ca[own], codes[own],
+                                                    corners, table)):
+                    plans[i] = p
+            groups.setdefault(id(plans), (plans, []))[1].append((q, log))
+        out = {}
+        for plans, group in groups.values():
+            reasons = [p.reason if isinstance(p, _NoPlan) else None for p in plans]
+            out.update((key, list(reasons)) for key in group)
+            good = [i for i, p in enumerate(plans) if isinstance(p, _Plan)]
+            if not good:
+                continue
+            used = [plans[i] for i in good]
+            index = np.array([p.index for p in used], dtype=np.intp)
+            tables = [self._tables[key] for key in group]
+            values = _evaluate(self._plans.arrays(index), at[good], self._values, tables,
+                               self._terms(used, [q for q, _ in group]))
+            for j, key in enumerate(group):
+                parts, notes = out[key], tables[j].notes
+                y, *errors = (v[:, j].tolist() for v in values)
+                # the notes of the leaves, each once, in the order of the leaves
+                noted = ([tuple(dict.fromkeys(n for leaf in plan.leaves
+                                              for n in notes.get(leaf, ()))) for plan in used]
+                         if notes else itertools.repeat(()))
+                for i, *part in zip(good, y, *([None if math.isnan(e) else e for e in column]
+                                               for column in errors), used, noted):
+                    parts[i] = part
+        return out
+
+    def _loo_value(self, q: str, log: bool, nu: float, x: float, c: float, exclude):
+        """y of quantity ``q`` at (nu, x, c) with the node ``exclude`` = (axis, index) left
+        out, extrapolated along that axis (pack time), or the reason there is none."""
+        st, looked, reached = self._stencil(nu, x, c, exclude=exclude,
+                                            table=self._table(q, log))
         if isinstance(st, str):
             return st
-        y, interp, solver, model = self._evaluate(st, table, self._loo_table(q))
-        # the notes of the leaves, each once, in the order of the leaves
-        leaves = () if not notes else (st,) if isinstance(st, _Leaf) else st.leaves()
-        return _Part(y, interp, solver, model, st.rows,
-                     tuple(dict.fromkeys(n for leaf in leaves for n in notes.get(leaf.node, ()))))
+        plan = _Plan(st, looked, reached, self.columns["method"])
+        arrays = (np.array([plan.nodes]), np.array([plan.coords]), np.array([plan.bem_only]))
+        # only y is wanted: no interpolation-error terms
+        return _evaluate(arrays, np.array([[nu, c, x]]), self._values, [self._table(q, log)],
+                         np.zeros((1, 13, 1)))[0][0, 0]
 
-    # ---------------------------------------------------------------- a query
+    # ---------------------------------------------------------------- queries
+    def quantities_many(self, nu, lam_ratio, ca_b, names=tuple(QUANTITIES)) -> list[dict]:
+        """The quantities ``names`` at points inside the map's box (see :func:`query_map`),
+        given as sequences ``nu``, ``lam_ratio``, ``ca_b``: per point {name: :class:`MapValue`}.
+
+        The points are answered together: each point's stencil is a :class:`_Plan` found once
+        per position in the grid (:meth:`_codes`) for every point there and every quantity,
+        and the sums of all points are taken at once (:func:`_evaluate`), in the same order
+        and with the same operations as for one point (:meth:`quantities` is this with one
+        point)."""
+        nu = [float(v) for v in nu]
+        r = [float(v) for v in lam_ratio]
+        ca = ca_b = [float(v) for v in ca_b]
+        if len(self._plans.plans) > _MAX_PLANS:      # bounded memory: start afresh
+            self._plans, self._plan_of, self._shapes = _Plans(), {}, {}
+        top = self.cas[-1]
+        clamp = [v > top * (1 + _ON_NODE) for v in ca]
+        c = [math.log(top) if k else math.log(v) for v, k in zip(ca, clamp)]
+        x = [math.sqrt(1.0 - v) for v in r]
+        at = np.array([nu, c, x]).T.reshape(len(nu), 3)
+        ratios, ca = r, [math.exp(v) for v in c]
+        codes = self._codes(nu, x, c, ca, r)
+        r, ca = np.array(r), np.array(ca)
+        shared = self._plans_at(at, r, ca, codes, corners=True)
+        keys = [(q, TRANSFORMS[q]["log"]) for q in names]
+        found = self._parts(keys, at, r, ca, codes, shared, True)
+        # the clamp's model error: the change to the second largest Ca_B (its value only)
+        second = np.flatnonzero(clamp) if any(clamp) else np.empty(0, dtype=np.intp)
+        if len(second) and len(self.cas) > 1:
+            at2, r2, ca2 = at[second], r[second], np.full(len(second), self.cas[-2])
+            at2[:, 1] = math.log(self.cas[-2])
+            codes2 = self._codes(at2[:, 0], at2[:, 2], at2[:, 1], ca2, r2)
+            shared2 = self._plans_at(at2, r2, ca2, codes2, corners=False)
+            found2 = self._parts(keys, at2, r2, ca2, codes2, shared2, False)
+        where2 = {i: j for j, i in enumerate(second.tolist())}
+        out = [{} for _ in nu]
+        for q, log in keys:
+            parts, logs = found[q, log], [log] * len(nu)
+            others = found2[q, log] if len(second) and len(self.cas) > 1 else None
+            again = [i for i, p in enumerate(parts) if log and p == "not positive"]
+            if again:
+                index = np.array(again, dtype=np.intp)
+                for i, p in zip(again, self._parts([(q, False)], at[index], r[index],
+                                                   ca[index], codes[index],
+                                                   [shared[i] for i in again], True)[q, False]):
+                    parts[i], logs[i] = p, False
+                back = [i for i in again if i in where2 and others is not None]
+                if back:
+                    index = np.array([where2[i] for i in back], dtype=np.intp)
+                    others = list(others)
+                    for i, p in zip(back, self._parts(
+                            [(q, False)], at2[index], r2[index], ca2[index], codes2[index],
+                            [shared2[j] for j in index.tolist()], False)[q, False]):
+                        others[where2[i]] = p
+            for i, part in enumerate(parts):
+                if isinstance(part, str):
+                    out[i][q] = MapValue(None, note=part if part != "outside"
+                                         else "outside the map")
+                    continue
+                notes = []
+                if clamp[i]:
+                    notes.append(f"Ca_B={ca_b[i]:.6g} above the map's largest {top:g}: value "
+                                 f"at Ca_B={top:g} (shapes nearly independent of Ca_B >= 50, "
+                                 "Chen et al. 2020), with the measured change between the two "
+                                 "largest Ca_B as model error")
+                    other = "no second Ca_B" if others is None else others[where2[i]]
+                    if isinstance(other, str):
+                        part[3] = None
+                        notes.append(f"clamp error unknown ({other})")
+                    else:
+                        part[3] = _add(part[3], abs(part[0] - other[0]))
+                out[i][q] = self._map_value(q, part, ratios[i], logs[i], notes)
+        return out
+
     def quantities(self, nu: float, lam_ratio: float, ca_b: float,
                    names=tuple(QUANTITIES)) -> dict:
         """The quantities ``names`` at a point inside the map's box (see :func:`query_map`):
-        {name: :class:`MapValue`}. Their stencil is found once."""
-        x, c, notes = math.sqrt(1.0 - lam_ratio), math.log(ca_b), []
-        clamp = ca_b > self.cas[-1] * (1 + _ON_NODE)
-        if clamp:
-            c = math.log(self.cas[-1])
-            notes.append(f"Ca_B={ca_b:.6g} above the map's largest {self.cas[-1]:g}: value at "
-                         f"Ca_B={self.cas[-1]:g} (shapes nearly independent of Ca_B >= 50, Chen "
-                         "et al. 2020), with the measured change between the two largest Ca_B "
-                         "as model error")
-        corners = self._corners(nu, math.exp(c), lam_ratio)
-        shared = self._stencil(nu, x, c, corners=corners)
-        # the clamp's model error: the change to the second largest Ca_B (its value only)
-        c2 = math.log(self.cas[-2]) if clamp and len(self.cas) > 1 else None
-        shared2 = self._stencil(nu, x, c2) if c2 is not None else None
-        out, described = {}, {}
-        for q in names:
-            log = TRANSFORMS[q]["log"]
-            part = self._interpolate(q, log, nu, x, c, corners, shared=shared)
-            if isinstance(part, str) and log and part == "not positive":
-                log = False
-                part = self._interpolate(q, log, nu, x, c, corners, shared=shared)
-            if isinstance(part, str):
-                out[q] = MapValue(None, note=part if part != "outside" else "outside the map")
-                continue
-            q_notes = list(notes)
-            if clamp:
-                other = (self._interpolate(q, log, nu, x, c2, shared=shared2)
-                         if c2 is not None else "no second Ca_B")
-                if isinstance(other, str):
-                    part.model = None
-                    q_notes.append(f"clamp error unknown ({other})")
-                else:
-                    part.model = _add(part.model, abs(part.y - other.y))
-            out[q] = self._map_value(q, part, lam_ratio, log, q_notes, described)
-        return out
+        {name: :class:`MapValue`} (:meth:`quantities_many` at one point)."""
+        return self.quantities_many((nu,), (lam_ratio,), (ca_b,), names)[0]
 
     def quantity(self, q: str, nu: float, lam_ratio: float, ca_b: float) -> MapValue:
         """One quantity at a point inside the map's box (see :func:`query_map`)."""
         return self.quantities(nu, lam_ratio, ca_b, (q,))[q]
 
-    def _map_value(self, q: str, part: _Part, lam_ratio: float, log: bool, notes: list,
-                   described: dict) -> MapValue:
-        """The :class:`MapValue` of an interpolation: value and error parts in q's units.
-        ``described``: {rows: (methods, sorted rows)} of the query (the quantities share
-        their rows)."""
-        value = _inverse(q, part.y, lam_ratio, log)
+    def _map_value(self, q: str, part: list, lam_ratio: float, log: bool,
+                   notes: list) -> MapValue:
+        """The :class:`MapValue` of an interpolation ``part`` (:meth:`_parts`): value and
+        error parts in q's units."""
+        y, interp, solver, model, plan, leaf_notes = part
+        value = _inverse(q, y, lam_ratio, log)
         if log:
             base = abs(value - TRANSFORMS[q]["offset"])
             errors = [None if e is None else base * math.expm1(e)
-                      for e in (part.interp, part.solver, part.model)]
+                      for e in (interp, solver, model)]
         else:
             scale = _scale(q, lam_ratio)
-            errors = [None if e is None else e / scale
-                      for e in (part.interp, part.solver, part.model)]
-        unknown = [name for name, e in zip(("interpolation", "solver", "model"), errors)
-                   if e is None]
-        if unknown:
-            notes.append("error without the unknown " + ", ".join(unknown) + " part")
-        if part.rows not in described:
-            described[part.rows] = (tuple(sorted({self.columns["method"][r] for r in part.rows})),
-                                    tuple(sorted(part.rows)))
-        methods, rows = described[part.rows]
+            errors = [None if e is None else e / scale for e in (interp, solver, model)]
+        if None in errors:
+            notes.append(_UNKNOWN[errors[0] is None, errors[1] is None, errors[2] is None])
         return MapValue(value, error=sum([e for e in errors if e is not None]),
                         interpolation_error=errors[0], solver_error=errors[1],
-                        model_error=errors[2], methods=methods, rows=rows,
-                        note="; ".join(list(part.notes) + notes))
+                        model_error=errors[2], methods=plan.methods, rows=plan.rows,
+                        note="; ".join(leaf_notes + tuple(notes)) if notes or leaf_notes
+                        else "")
 
     def shape_class(self, rows) -> "MapValue":
         classes = {self.columns["shape_class"][r] for r in rows}
@@ -1043,10 +1263,10 @@ class SolutionMap:
                         if y0 is None:
                             continue
                         for axis, index in (("lam", k), ("nu", i_nu), ("ca", i_ca)):
-                            p = self._interpolate(q, log, nu, x, self._cs[i_ca],
-                                                  exclude=(axis, index))
-                            if not isinstance(p, str):
-                                out[f"loo_{axis}_{q}"][row] = float(f"{abs(p.y - y0):.3g}")
+                            y = self._loo_value(q, log, nu, x, self._cs[i_ca],
+                                                exclude=(axis, index))
+                            if not isinstance(y, str):
+                                out[f"loo_{axis}_{q}"][row] = float(f"{abs(y - y0):.3g}")
         return out
 
 
@@ -1208,6 +1428,15 @@ def query_map(nu: float, lam_ratio: float, ca_b: float, map=None) -> MapQuery:
         ``quantities[q]`` a :class:`MapValue` for each of :data:`QUANTITIES` and
         ``shape_class``.
     """
+    return query_map_many((nu,), (lam_ratio,), (ca_b,), map)[0]
+
+
+def _point(nu, lam_ratio, ca_b) -> tuple[float, float, float]:
+    """A query's (ν, λ/λc, Ca_B) as floats, checked (:func:`query_map`'s errors; floats in
+    range pass at once: a map is queried at many points)."""
+    if (nu.__class__ is lam_ratio.__class__ is ca_b.__class__ is float
+            and 0.0 < nu <= 1.0 and 0.0 < lam_ratio < 1.0 and 0.0 < ca_b < math.inf):
+        return nu, lam_ratio, ca_b
     nu = float(as_finite("nu", nu))
     if not 0.0 < nu <= 1.0:
         raise InvalidParameterError("nu", nu, "0 < nu <= 1")
@@ -1217,17 +1446,37 @@ def query_map(nu: float, lam_ratio: float, ca_b: float, map=None) -> MapQuery:
                               "lam >= lam_c: the vesicle cannot pass the tube intact")
     if lam_ratio <= 0.0:
         raise InvalidParameterError("lam_ratio", lam_ratio, "0 < lam_ratio < 1")
-    ca_b = float(check_positive("ca_b", ca_b))
+    return nu, lam_ratio, float(check_positive("ca_b", ca_b))
+
+
+def query_map_many(nu, lam_ratio, ca_b, map=None, names=tuple(QUANTITIES)) -> list[MapQuery]:
+    """:func:`query_map` at many points, given as sequences of equal length: one
+    :class:`MapQuery` per point, in their order, with the quantities ``names`` (default all;
+    with ``V_over_U`` or ``ell`` for the shape class) and ``shape_class``. Every point is
+    checked first (the errors of :func:`query_map`); the points inside the map are answered
+    together (:meth:`SolutionMap.quantities_many`), each exactly as alone."""
+    points = [_point(*p) for p in zip(nu, lam_ratio, ca_b, strict=True)]
     m = map if isinstance(map, SolutionMap) else load_map(map)
-    reason = outside_reason(m, nu, lam_ratio, ca_b)
-    if reason:
-        out = {q: MapValue(None, note=reason) for q in (*QUANTITIES, "shape_class")}
-    else:
-        out = m.quantities(nu, lam_ratio, ca_b)
-        rows = out["V_over_U"].rows or out["ell"].rows
-        out["shape_class"] = (m.shape_class(rows) if rows else
-                              MapValue(None, note=out["V_over_U"].note))
-    return MapQuery(nu, lam_ratio, ca_b, m.source, out)
+    reasons = [outside_reason(m, *p) for p in points]
+    inside = [p for p, reason in zip(points, reasons) if not reason]
+    answers = iter(m.quantities_many(*zip(*inside), names) if inside else ())
+    out = []
+    for p, reason in zip(points, reasons):
+        if reason:
+            values = {q: MapValue(None, note=reason) for q in (*names, "shape_class")}
+        else:
+            values = next(answers)
+            first = values.get("V_over_U") or values["ell"]
+            rows = first.rows or values.get("ell", first).rows
+            if not rows:
+                values["shape_class"] = MapValue(None, note=first.note)
+            else:
+                shape = m._shapes.get(rows)
+                if shape is None:
+                    shape = m._shapes[rows] = m.shape_class(rows)
+                values["shape_class"] = shape
+        out.append(MapQuery(*p, m.source, values))
+    return out
 
 
 def outside_reason(m: SolutionMap, nu: float, lam_ratio: float, ca_b: float) -> str:

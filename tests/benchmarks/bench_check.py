@@ -9,12 +9,14 @@ is read once, as in one command), and the command line ``vesicle-tube check FILE
 end to end (process start included). The map is the shipped one, or the one packed from the
 committed build folder when none is shipped. Not a test: timings depend on the machine. Run
 with ``python tests/benchmarks/bench_check.py``; the measurements, with the machine they were
-taken on, go to ``docs/data/bench_check.json`` (``tests/benchmarks/bench_store.py``).
+taken on, go to ``docs/data/bench_check.json`` (``tests/benchmarks/bench_store.py``), beside
+the ``throughput`` entry of ``tests/benchmarks/check_throughput.py``, which is kept.
 """
 
 from __future__ import annotations
 
 import csv
+import json
 import os
 import random
 import statistics
@@ -68,7 +70,7 @@ def _relative(path) -> str:
 
 
 def main() -> int:
-    from bench_store import machine, store
+    from bench_store import DATA, machine, store
     from correlations import check, registry
     load_before = os.getloadavg()
     m = solution_map()
@@ -98,7 +100,10 @@ def main() -> int:
     print(f"  vesicle-tube check FILE --json, end to end: min {min(wall):.2f} s, median "
           f"{statistics.median(wall):.2f} s over {len(wall)} runs (target <= {TARGET_S:g} s): "
           f"{'ok' if ok else 'SLOW'}")
+    previous = DATA / "bench_check.json"      # check_throughput.py's entry is kept
+    kept = json.loads(previous.read_text()).get("throughput") if previous.exists() else None
     store("check", {
+        **({"throughput": kept} if kept else {}),
         "parameters": {"rows": ROWS, "seed": 1, "map": _relative(m.source),
                        "in_process_runs": len(times), "end_to_end_runs": len(wall)},
         "checks": checks, "verdicts": report.counts,

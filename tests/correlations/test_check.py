@@ -608,11 +608,12 @@ def test_cli_report_with_the_figure(cli, rows_file, good, build_map, tmp_path, s
 # ----------------------------------------------------------------------------- large inputs
 
 def _sphere_rows(n: int, seed: int = 3) -> list[dict]:
-    """``n`` rigid spheres at distinct lam in [0.05, 0.5) with the small-sphere law's V/U and
-    dp+ (Chen et al. 2020 eq. small1, small2) written to 9 digits: with bem=False every check
-    is a closed form (about 25 us a row)."""
+    """``n`` rigid spheres at evenly spaced lam in [0.05, 0.5), in random order, with the
+    small-sphere law's V/U and dp+ (Chen et al. 2020 eq. small1, small2) written to 9 digits
+    (distinct V/U at every lam up to a million rows): with bem=False every check is a closed
+    form (about 25 us a row)."""
     rng = np.random.default_rng(seed)
-    lam = rng.uniform(0.05, 0.5, n)
+    lam = rng.permutation(np.linspace(0.05, 0.5, n, endpoint=False))
     return [{"name": f"s{i}", "kind": "sphere", "lam": f"{x:.9f}",
              "V_over_U": f"{2 - 4 / 3 * x**2:.9f}", "dp_plus_R0": f"{16 * x**6:.9e}"}
             for i, x in enumerate(lam)]
@@ -663,11 +664,14 @@ def test_a_bad_row_stops_the_check_before_any_solver_runs(monkeypatch):
 
 
 def test_checking_many_rows_holds_a_bounded_part_of_them(tmp_path):
-    """10 000 rows streamed from a CSV file: the peak of the memory allocated while checking
-    (tracemalloc) stays below what the rows listed and the per-row arrays of the series checks
-    take, with room for the caches, and far below what holding every row takes (per row: the
-    report of one row, measured on 400 rows kept by check_results, about 8 kB)."""
-    n, keep = 10_000, 100
+    """50 000 rows streamed from a CSV file: the peak of the memory allocated while checking
+    (tracemalloc, this process) stays below what the rows listed, the per-row arrays of the
+    series checks and the chunks of rows on their way take, with room for the caches, and far
+    below what holding every row takes (per row: the report of one row, measured on 400 rows
+    kept by check_results, about 8 kB). Chunks on their way: the one checked here (parsed,
+    at most a report a row) and, with worker processes, up to 2 per worker and one more as
+    read (their cells, measured on 400 rows read)."""
+    n, keep = 50_000, 100
     rows = _sphere_rows(n)
     path = _write_csv(tmp_path / "rows.csv", rows)
     check_results(rows[:10], bem=False)                     # imports and caches warm
@@ -677,6 +681,10 @@ def test_checking_many_rows_holds_a_bounded_part_of_them(tmp_path):
         held = check_results(rows[:400], bem=False)
         per_row = (tracemalloc.get_traced_memory()[0] - base) / 400
         del held
+        base = tracemalloc.get_traced_memory()[0]
+        read = list(check._source(path)[1]())[:400]
+        per_read = (tracemalloc.get_traced_memory()[0] - base) / 400
+        del read
         tracemalloc.reset_peak()
         base = tracemalloc.get_traced_memory()[0]
         summary = check_summary(path, bem=False, keep=keep)
@@ -686,9 +694,10 @@ def test_checking_many_rows_holds_a_bounded_part_of_them(tmp_path):
     assert summary.n_rows == n and len(summary.rows) == keep
     assert summary.counts == {"pass": n, "warn": 0, "fail": 0}, summary.failure_lines()
     arrays = 120                    # bytes a row: series arrays (about 60) and their sorting
-    caches = 4 * 2**20              # the lru caches of numbers, lam_c and references
+    caches = 4 * 2**20              # the caches of numbers, lam_c and references
+    chunks = check.CHUNK_ROWS * (per_row + (2 * check._workers() + 1) * per_read)
     assert per_row > 2000, per_row
-    assert peak < keep * per_row + n * arrays + caches, (peak, per_row)
+    assert peak < keep * per_row + n * arrays + caches + chunks, (peak, per_row, per_read)
     assert peak < 0.1 * n * per_row, (peak, per_row)
 
 
