@@ -1,5 +1,6 @@
 """Geometry of confinement, small-object and near-critical asymptotics, and the
-Secomb-Skalak / Barakat-Shaqfeh lubrication solver for a vesicle in a tube.
+Secomb-Skalak / Barakat-Shaqfeh lubrication solver for a vesicle in a tube, or a red cell whose
+membrane also resists in-plane shear (:mod:`lubrication.membrane`).
 
 Scalings used everywhere: lengths by the volume radius R0 (tube radius R where named), velocities
 by the mean Poiseuille velocity U, extra pressure drop dp_plus_R0 = dp+ R0/(eta U).

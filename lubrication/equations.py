@@ -20,9 +20,15 @@ Nondimensionalisation (stated once, used in this module and in :mod:`lubrication
   :math:`\mathrm{Ca} = \eta V R^2/\kappa = \mathrm{Ca}_B/(\lambda^2(1 - Q))`
   (:func:`capillary_number`, the only place where the conversion is made).
 
+* red-cell membrane (optional, :mod:`lubrication.membrane`): shear modulus :math:`G_s` through
+  the shear capillary number :math:`\mathrm{Ca}_S = \eta U/G_s`, in the model's tension unit
+  :math:`G_s/(\eta V) = (1 - Q)/\mathrm{Ca}_S` (high-Ca) or
+  :math:`G_s R^2/\kappa = \mathrm{Ca}_B/(\lambda^2\mathrm{Ca}_S)` (bending)
+  (:func:`shear_modulus`, the only place where that conversion is made).
+
 The module reads in the order of the method: (1) the local gap flow, exact and as series near
-the wall, (2) the capillary number, (3) the polar caps, (4) the right-hand sides of the two
-boundary-value problems.
+the wall, (2) the capillary and shear numbers, (3) the polar caps, (4) the right-hand sides of the
+two boundary-value problems, with or without shear elasticity.
 
 References
 ----------
@@ -51,6 +57,7 @@ __all__ = [
     "membrane_shear_rate_series",
     "wall_shear_rate_series",
     "capillary_number",
+    "shear_modulus",
     "spherical_cap",
     "rhs_high_ca",
     "rhs_bending",
@@ -312,6 +319,30 @@ def capillary_number(ca_b, lam, Q):
     return ca_b / (lam * lam * (1.0 - Q))
 
 
+def shear_modulus(ca_s, Q, ca=1.0):
+    r"""Membrane shear modulus :math:`G_s` in the model's tension unit.
+
+    .. math:: \frac{G_s}{\eta V} = \frac{U}{V}\,\frac{G_s}{\eta U}
+              = \frac{1 - Q}{\mathrm{Ca}_S}, \qquad
+              \frac{G_s R^2}{\kappa} = \mathrm{Ca}\,\frac{G_s}{\eta V}
+              = \frac{\mathrm{Ca}_B}{\lambda^2\,\mathrm{Ca}_S},
+              \qquad \mathrm{Ca}_S = \frac{\eta U}{G_s}
+
+    with :math:`\mathrm{Ca} = \eta V R^2/\kappa` of :func:`capillary_number` (``ca=1``: the
+    high-Ca model, tensions in ηV). The single place where the user's
+    :math:`\mathrm{Ca}_S` (built, like :math:`\mathrm{Ca}_B`, on the mean velocity U) is
+    converted to the model's scale; Q is the current iterate of the boundary-value problem.
+
+    Examples
+    --------
+    >>> shear_modulus(0.2, 0.5)                 # G_s = 5 eta U = 2.5 eta V
+    2.5
+    >>> shear_modulus(0.2, 0.5, capillary_number(50.0, 1.0, 0.5)) == 50.0 / 0.2
+    True
+    """
+    return ca * (1.0 - Q) / ca_s
+
+
 # --------------------------------------------------------------------------- 3. polar caps
 def spherical_cap(curvature, rim_radius):
     r"""Polar angle, area and volume of a spherical cap cut at the radius ``rim_radius``.
@@ -376,7 +407,13 @@ def _clipped_gap_flow(r, Q):
     return gap_flow(r_eval, Q)
 
 
-def rhs_high_ca(t, y, params):
+def _shear_terms(shear, r, a, polar, modulus):
+    """tau_s - tau_phi = 2 G_s f at radius r and area coordinate a (0 inside POLE_RADIUS, where
+    f ~ r^2 vanishes and Newton iterates may carry any a)."""
+    return np.where(polar, 0.0, 2.0 * modulus * shear.tension_difference(r, a))
+
+
+def rhs_high_ca(t, y, params, shear=None):
     r"""Right-hand side of the high-Ca (κ → 0) model, vectorised for :func:`scipy.integrate.solve_bvp`.
 
     Arc length from the rear pole, :math:`s = S t`; :math:`\psi` tilt angle
@@ -391,14 +428,31 @@ def rhs_high_ca(t, y, params):
     (Secomb et al. 1986; Barakat & Shaqfeh 2018b). Below ``POLE_RADIUS`` the spherical-cap
     limit :math:`\psi' = -S p/(2\sigma)` is used.
 
+    **Red-cell membrane** (``shear`` given, :mod:`lubrication.membrane`): the slot ``sigma``
+    holds the meridional tension :math:`\tau_s`, and :math:`\tau_\varphi = \tau_s - 2G_s f`
+    with :math:`f` the deviatoric tension at the stretch :math:`\lambda_\varphi = r/
+    r_\mathrm{ref}(A)` and :math:`G_s` from :func:`shear_modulus`. The normal balance
+    :math:`p = \tau_s c_s + \tau_\varphi c_\varphi` and the tangential balance
+    :math:`\mathrm{d}\tau_s/\mathrm{d}s + (\tau_s - \tau_\varphi)r^{-1}\mathrm{d}r/
+    \mathrm{d}s = -e_m` (:func:`lubrication.membrane.membrane_load`) give
+
+    .. math:: \psi' = -S\,\frac{p + \tau_\varphi\cos\psi/r}{\tau_s}, \qquad
+              \tau_s' = S\left[-e_m + (\tau_s - \tau_\varphi)\frac{\sin\psi}{r}\right],
+
+    which reduce to the equations above for :math:`G_s = 0`. Carrying :math:`\tau_s` rather
+    than :math:`\sigma` keeps derivatives of the reference shape out of the equations.
+
     Parameters
     ----------
     t : ndarray, shape (m,)
         Mesh in [0, 1].
     y : ndarray, shape (6, m)
-        State ``HIGH_CA_STATE`` = (r, psi, p, sigma, A, Omega); p in eta V/R, sigma in eta V.
+        State ``HIGH_CA_STATE`` = (r, psi, p, sigma, A, Omega); p in eta V/R, sigma (or tau_s)
+        in eta V.
     params : ndarray, shape (2,)
         (Q, S).
+    shear : lubrication.membrane.MembraneShear, optional
+        Shear elasticity of a red-cell membrane, area in R^2; None (default): a vesicle.
 
     Returns
     -------
@@ -409,16 +463,27 @@ def rhs_high_ca(t, y, params):
     sin, cos = np.sin(psi), np.cos(psi)
     G, e_m, _ = _clipped_gap_flow(r, Q)
     polar = r < POLE_RADIUS
-    cos_over_r = np.where(polar, -p / (2.0 * sigma), cos / np.where(polar, 1.0, r))
+    r_safe = np.where(polar, 1.0, r)
+    if shear is None:
+        mean = sigma
+    else:
+        diff = _shear_terms(shear, r, y[4], polar, shear_modulus(shear.ca_s, Q))
+        mean = sigma - 0.5 * diff                 # isotropic part (tau_s + tau_phi)/2
+    cos_over_r = np.where(polar, -p / (2.0 * mean), cos / r_safe)
+    dpsi = -p / sigma - cos_over_r
+    dsigma = -e_m
+    if shear is not None:
+        dpsi = dpsi + diff / sigma * cos_over_r
+        dsigma = dsigma + diff * sin / r_safe
     return S * np.vstack((-sin,
-                          -p / sigma - cos_over_r,
+                          dpsi,
                           G * cos,
-                          -e_m,
+                          dsigma,
                           2.0 * math.pi * r,
                           math.pi * r * r * cos))
 
 
-def rhs_bending(t, y, params, ca_b, lam):
+def rhs_bending(t, y, params, ca_b, lam, shear=None):
     r"""Right-hand side of the bending (Helfrich) model, vectorised for :func:`scipy.integrate.solve_bvp`.
 
     .. math::
@@ -436,6 +501,20 @@ def rhs_bending(t, y, params, ca_b, lam):
     Below ``POLE_RADIUS`` the spherical-cap limits (:math:`\cos\psi/r \to -c_s`,
     :math:`q_s \sin\psi/r \to -(p - 2\sigma c_s)/2` at either pole) are used.
 
+    **Red-cell membrane** (``shear`` given): the elastic principal tensions add to the Helfrich
+    stresses, whose tangential divergence vanishes for the multiplier :math:`\sigma` (hence
+    :math:`\sigma' = -S\,\mathrm{Ca}\,e_m` above). The slot ``sigma`` then holds
+    :math:`\tilde\tau_s = \sigma + G_s f` and :math:`\tilde\tau_\varphi = \sigma - G_s f`
+    (:func:`rhs_high_ca`; :math:`G_s` in κ/R² from :func:`shear_modulus`); the normal balance
+    has :math:`\tilde\tau_s c_s + \tilde\tau_\varphi c_\varphi` in place of
+    :math:`\sigma(c_s + c_\varphi)`, the tangential balance that of
+    :func:`lubrication.membrane.membrane_load`:
+
+    .. math:: q_s' \mathrel{+}= -S(\tilde\tau_s - \tilde\tau_\varphi)\frac{\cos\psi}{r},
+              \qquad
+              \tilde\tau_s' = S\left[-\mathrm{Ca}\,e_m
+              + (\tilde\tau_s - \tilde\tau_\varphi)\frac{\sin\psi}{r}\right].
+
     Parameters
     ----------
     t : ndarray, shape (m,)
@@ -448,6 +527,8 @@ def rhs_bending(t, y, params, ca_b, lam):
         :math:`\mathrm{Ca}_B = \eta U R_0^2/\kappa` [-].
     lam : float
         Confinement :math:`\lambda = R_0/R` [-].
+    shear : lubrication.membrane.MembraneShear, optional
+        Shear elasticity of a red-cell membrane, area in R^2; None (default): a vesicle.
 
     Returns
     -------
@@ -466,11 +547,16 @@ def rhs_bending(t, y, params, ca_b, lam):
     shear_term = np.where(polar, -0.5 * (p - 2.0 * sigma * c_s), q_s * sin_over_r)
     dq_s = (p - sigma * (c_s - cos_over_r)
             + 0.5 * (c_s + cos_over_r) * (c_s * c_s - cos_over_r * cos_over_r) + shear_term)
+    dsigma = -ca * e_m
+    if shear is not None:
+        diff = _shear_terms(shear, r, y[6], polar, shear_modulus(shear.ca_s, Q, ca))
+        dq_s = dq_s - diff * cos_over_r
+        dsigma = dsigma + diff * sin_over_r
     return S * np.vstack((-sin,
                           -c_s,
                           dc_s,
                           dq_s,
                           ca * G * cos,
-                          -ca * e_m,
+                          dsigma,
                           2.0 * math.pi * r,
                           math.pi * r * r * cos))

@@ -313,9 +313,12 @@ PROFILE_COLUMNS = (
     ("r", "membrane radius [R]"),
     ("psi", "tilt angle [rad]"),
     ("pressure", "gap pressure minus inside pressure [eta U / R]"),
-    ("tension", "isotropic membrane tension [eta U]"),
+    ("tension", "isotropic membrane tension (mean of the principal tensions) [eta U]"),
     ("shear_membrane", "viscous shear stress on the membrane [eta U / R]"),
     ("shear_wall", "viscous shear stress on the wall [eta U / R]"),
+    ("tension_s", "meridional principal tension [eta U]"),
+    ("tension_phi", "azimuthal principal tension [eta U]"),
+    ("stretch_phi", "azimuthal stretch r/r_ref of a red-cell membrane, empty for a vesicle [-]"),
 )
 
 
@@ -328,7 +331,9 @@ class LubricationResult(VesicleSolution):
 
     Inputs
         ``model`` ("high-Ca" or "bending"); ``ca_b`` is None in :meth:`to_dict` for the
-        high-Ca model (inf).
+        high-Ca model (inf). Red-cell membrane (:mod:`lubrication.membrane`): ``ca_s`` =
+        ηU/G_s (inf, None in :meth:`to_dict`, for a vesicle) and ``reference``, the name of
+        the stress-free shape (None for a vesicle).
     Outcome
         ``status`` (CONVERGED when all acceptance checks passed), ``message``.
     Scalars
@@ -336,8 +341,11 @@ class LubricationResult(VesicleSolution):
         0, or the rear pole lies ahead of the rearmost point of the membrane, as in deep
         parachutes whose cavity floor is convex again), else "bullet".
     Profiles (from rear pole to front pole, poles included)
-        ``psi``, ``pressure``, ``shear_wall`` besides the shared ones (units in
-        :data:`PROFILE_COLUMNS`).
+        ``psi``, ``pressure``, ``shear_wall`` besides the shared ones; the principal tensions
+        ``tension_s`` (meridional) and ``tension_phi`` (azimuthal), whose mean is ``tension``
+        (all three equal for a vesicle), and the azimuthal stretch ``stretch_phi`` =
+        :math:`\lambda_\varphi = 1/\lambda_s` of a red-cell membrane (NaN for a vesicle; 1 at
+        the poles). Units in :data:`PROFILE_COLUMNS`.
     Diagnostics
         ``force_balance_residual`` (net axial force on the vesicle over the scale of its
         pressure force), ``area_error`` and ``volume_error`` (relative, by quadrature of the
@@ -347,10 +355,15 @@ class LubricationResult(VesicleSolution):
     """
 
     model: str
+    ca_s: float = math.inf
+    reference: str | None = None
     Q: float = math.nan
     psi: np.ndarray = profile_field()
     pressure: np.ndarray = profile_field()
     shear_wall: np.ndarray = profile_field()
+    tension_s: np.ndarray = profile_field()
+    tension_phi: np.ndarray = profile_field()
+    stretch_phi: np.ndarray = profile_field()
     force_balance_residual: float = math.nan
     n_nodes: int = 0
     max_residual: float = math.nan
@@ -362,11 +375,13 @@ class LubricationResult(VesicleSolution):
     CSV_WHEN_FAILED: ClassVar[bool] = False
 
     def default_stem(self) -> str:
-        """``lubrication_nu<nu>_lam<lam>_<model>[_caB<ca_b>][_failed]``, e.g.
-        ``lubrication_nu0.9_lam1.2000_high-Ca``."""
+        """``lubrication_nu<nu>_lam<lam>_<model>[_caB<ca_b>][_caS<ca_s>_<reference>][_failed]``,
+        e.g. ``lubrication_nu0.9_lam1.2000_high-Ca``."""
         stem = f"lubrication_nu{self.nu:.4g}_lam{self.lam:.6g}_{self.model}"
         if self.model == "bending":
             stem += f"_caB{self.ca_b:.4g}"
+        if self.reference is not None:
+            stem += f"_caS{self.ca_s:.4g}_{self.reference}"
         return stem if self.success else stem + "_failed"
 
     def profiles(self) -> dict[str, np.ndarray]:

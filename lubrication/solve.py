@@ -25,11 +25,17 @@ The method, in the order of this module:
    of mesh nodes exceeded" trap).
 5. **Bending problem** (:func:`lubrication.equations.rhs_bending`, 8 functions, 10 conditions),
    by continuation in Ca from the high-Ca solution.
+   **Red-cell membrane** (``ca_s`` finite, :mod:`lubrication.membrane`): the same two problems
+   with the principal tensions of a shear-elastic membrane (the meridional tension takes the
+   tension's place among the unknowns; the stretch comes from the area A already integrated),
+   reached from the vesicle solution of the same point by continuation in
+   :math:`\mathrm{Ca}_S = \eta U/G_s` from 1e3 down, or from a red-cell warm start.
 6. **Acceptance.** Never the solver's status flag alone: largest collocation residual, area and
    volume recomputed by quadrature of the solution (relative error ≤ ``CONSTRAINT_TOL``), net
    axial force on the vesicle (≤ ``FORCE_TOL`` of its pressure force), positive tension on the
-   physical branch. A failure is returned as a result with its :class:`~lubrication.results.Status`
-   (``success`` False) and the reason.
+   physical branch, for a red cell the azimuthal stretch inside the guard of the material map
+   and a meridian that does not cross itself. A failure is returned as a result with its
+   :class:`~lubrication.results.Status` (``success`` False) and the reason.
 7. **Result** in project units (:class:`lubrication.results.LubricationResult`):
    :math:`V/U = 1/(1 - Q)`, :math:`\Delta p^+ R/(\eta U) = [\Delta p^+R/(\eta V)]/(1 - Q)`,
    :math:`\Delta p^+R_0/(\eta U) = [\Delta p^+R/(\eta V)]\,\lambda/(1 - Q)` with
@@ -76,17 +82,19 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid, solve_bvp
 from tqdm.auto import tqdm
 
-from .checks import CannotPassError, Deadline, InvalidParameterError, check_range
+from .checks import CannotPassError, Deadline, InvalidParameterError, check_choice, check_range
 from .equations import (BENDING_STATE, HIGH_CA_STATE, gap_flow, capillary_number, rhs_bending,
-                        rhs_high_ca, spherical_cap)
+                        rhs_high_ca, shear_modulus, spherical_cap)
 from .geometry import critical_confinement, critical_length
 from .io import provenance
+from .membrane import (REFERENCE_SHAPES, STRETCH_SQ_GUARD, MembraneShear, reference_shape,
+                       tension_difference)
 from .results import LubricationResult, Status
 
-__all__ = ["solve_lubrication", "sweep_lubrication", "check_inputs", "lowest_lam_ratio",
-           "high_ca_branch_end", "CAP_RADIUS", "CONSTRAINT_TOL", "FORCE_TOL", "NU_RANGE",
-           "MIN_LAM_RATIO", "CA_B_RANGE", "HIGH_CA_BRANCH_END", "MAX_SWEEP_POINTS",
-           "TOL_RANGE"]
+__all__ = ["solve_lubrication", "sweep_lubrication", "check_inputs", "check_shear_inputs",
+           "lowest_lam_ratio", "high_ca_branch_end", "CAP_RADIUS", "CONSTRAINT_TOL", "FORCE_TOL",
+           "NU_RANGE", "MIN_LAM_RATIO", "CA_B_RANGE", "CA_S_RANGE", "HIGH_CA_BRANCH_END",
+           "MAX_SWEEP_POINTS", "TOL_RANGE"]
 
 logger = logging.getLogger(__name__)
 
@@ -132,6 +140,13 @@ NU_RANGE = (0.3, 1.0)
 # of Faxen and Chen et al. 2020 eq. small1/small2, or the BEM, apply there), and below
 # CAP_RADIUS / lam_c the excised polar caps would be wider than the vesicle.
 MIN_LAM_RATIO = 0.1
+# Shear capillary number Ca_S = eta U/G_s of a red-cell membrane (lubrication.membrane):
+# 0.02-1 for red cells at 0.1-5 mm/s (G_s = 6 µN/m, eta = 1.2 mPa s). Measured at nu = 0.61,
+# lam/lam_c = 0.95, high-Ca: Ca_S = 0.1-1000 converge in 1-3 s, 0.01 does not (its continuation
+# in lam/lam_c stops at 0.962); the departure from the vesicle falls like 1/Ca_S (3.4e-8 in V/U
+# and 6.8e-7 in dp+ at 1000), so above 1e4 the red cell is the vesicle (ca_s=None) within the
+# solver's tolerance. The bending model in a 5 µm tube: tests/benchmarks/rbc_shear_lubrication.py.
+CA_S_RANGE = (1e-2, 1e4)
 # Bending capillary number Ca_B = eta U R0^2/kappa of the bending model (measured at nu = 0.9,
 # lam/lam_c = 0.99): 1e-2 converges in 1.3 s (13 continuation steps in Ca from 1e4); at 1e5 the
 # bending model agrees with the high-Ca model (ca_b=inf) to 1e-10 in V/U and 1e-8 in dp+, and
@@ -185,7 +200,8 @@ def lowest_lam_ratio(nu, ca_b=math.inf) -> float:
 
 
 #: Names of the inputs in messages (the command line passes its option names instead).
-PARAMETER_NAMES = {"nu": "nu", "lam": "lam", "lam_ratio": "lam_ratio", "ca_b": "ca_b"}
+PARAMETER_NAMES = {"nu": "nu", "lam": "lam", "lam_ratio": "lam_ratio", "ca_b": "ca_b",
+                   "ca_s": "ca_s", "reference": "reference"}
 
 
 def check_inputs(nu, lam=None, lam_ratio=None, ca_b=math.inf, *, names=None):
@@ -253,6 +269,32 @@ def check_inputs(nu, lam=None, lam_ratio=None, ca_b=math.inf, *, names=None):
     return nu, lam, lam_c, ca_b
 
 
+def check_shear_inputs(nu, ca_s=None, reference="biconcave", *, names=None):
+    """Checked ``(ca_s, reference)`` of a red-cell membrane, before any work.
+
+    ``ca_s`` None or ``math.inf``: no shear elasticity (a vesicle), returned as ``math.inf``;
+    else within :data:`CA_S_RANGE`. ``reference`` one of
+    :data:`lubrication.membrane.REFERENCE_SHAPES`; with a finite ``ca_s`` the reference shape
+    must exist at ``nu`` (:func:`lubrication.membrane.reference_nu_range`). ``names`` as in
+    :func:`check_inputs`.
+
+    Raises
+    ------
+    InvalidParameterError
+        The message names the parameter, its value and the valid range.
+    """
+    n = dict(PARAMETER_NAMES, **(names or {}))
+    reference = check_choice(n["reference"], reference, REFERENCE_SHAPES)
+    if ca_s is None or (isinstance(ca_s, (int, float, np.integer, np.floating))
+                        and ca_s == math.inf):
+        return math.inf, reference
+    ca_s = float(check_range(n["ca_s"], ca_s, *CA_S_RANGE,
+                             reason=f"shear capillary number eta U/G_s; {n['ca_s']}=None (or inf) "
+                                    "for a vesicle (no shear elasticity)"))
+    reference_shape(reference, nu)          # raises if the family has no member at nu
+    return ca_s, reference
+
+
 def _at_least(x, bound) -> bool:
     """``x >= bound`` for a finite real ``x``; False for anything else (checked elsewhere)."""
     try:
@@ -275,10 +317,19 @@ class _Problem:
     tol: float
     max_nodes: int
     deadline: Deadline = Deadline(None)
+    ca_s: float = math.inf
+    reference: str = "biconcave"
 
     @property
     def delta(self) -> float:
         return 1.0 - self.lam / self.lam_c
+
+    @property
+    def shear(self) -> MembraneShear | None:
+        """The red-cell membrane's shear elasticity, or None for a vesicle (Ca_S = inf)."""
+        if math.isinf(self.ca_s):
+            return None
+        return MembraneShear(self.ca_s, reference_shape(self.reference, self.nu), self.area)
 
     @property
     def model(self) -> str:
@@ -295,8 +346,10 @@ class _Problem:
         return 4.0 / 3.0 * math.pi * self.lam**3
 
 
-def _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes, max_time=None) -> _Problem:
+def _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes, max_time=None, ca_s=None,
+                  reference="biconcave") -> _Problem:
     nu, lam, lam_c, ca_b = check_inputs(nu, lam, lam_ratio, ca_b)
+    ca_s, reference = check_shear_inputs(nu, ca_s, reference)
     tol = float(check_range("tol", tol, *TOL_RANGE,
                             reason="solve_bvp's relative residual tolerance"))
     if (not isinstance(max_nodes, (int, np.integer)) or isinstance(max_nodes, bool)
@@ -304,7 +357,8 @@ def _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes, max_time=None) -> _P
         raise InvalidParameterError("max_nodes", max_nodes, f"an integer, 100 <= max_nodes <= "
                                     f"{MAX_NODES}", "the mesh bounds the time of one solve_bvp "
                                     "call (module docstring: resource envelope)")
-    return _Problem(nu, lam, lam_c, ca_b, tol, int(max_nodes), Deadline(max_time))
+    return _Problem(nu, lam, lam_c, ca_b, tol, int(max_nodes), Deadline(max_time), ca_s,
+                    reference)
 
 
 # --------------------------------------------------------------------------- 2.-3. initial guess
@@ -423,8 +477,13 @@ def _bc_high_ca(prob):
 
 
 def _solve_high_ca(prob, t, y, params):
+    shear = prob.shear
+
+    def fun(t_, y_, p):
+        return rhs_high_ca(t_, y_, p, shear)
+
     scales = _high_ca_scales(y, prob)
-    return _solve_scaled(rhs_high_ca, _bc_high_ca(prob), t, y, params, scales, prob)
+    return _solve_scaled(fun, _bc_high_ca(prob), t, y, params, scales, prob)
 
 
 # --------------------------------------------------------------------------- 5. bending problem
@@ -461,8 +520,10 @@ def _bc_bending(prob, q_scale):
 
 
 def _solve_bending(prob, t, y, params):
+    shear = prob.shear
+
     def fun(t_, y_, p):
-        return rhs_bending(t_, y_, p, prob.ca_b, prob.lam)
+        return rhs_bending(t_, y_, p, prob.ca_b, prob.lam, shear)
 
     scales = _bending_scales(y, prob)
     return _solve_scaled(fun, _bc_bending(prob, scales[3, 0]), t, y, params, scales, prob)
@@ -481,6 +542,29 @@ def _gauss_integral(f_of_t, t):
     h = np.diff(t)
     tq = (t[:-1, None] + 0.5 * h[:, None] * (x[None, :] + 1.0)).ravel()
     return float(np.sum(f_of_t(tq).reshape(len(h), 5) * (0.5 * h[:, None] * w[None, :])))
+
+
+def _self_intersects(x, r) -> bool:
+    """Whether the meridian polyline (x, r) crosses itself (two non-adjacent segments cross).
+
+    Only segments whose axial extents overlap are compared (sorted by their left end), so a
+    meridian that is monotonic in x except near a parachute's rim costs O(n log n).
+    """
+    p0, p1 = np.column_stack((x[:-1], r[:-1])), np.column_stack((x[1:], r[1:]))
+    lo, hi = np.minimum(p0[:, 0], p1[:, 0]), np.maximum(p0[:, 0], p1[:, 0])
+    order = np.argsort(lo, kind="stable")
+
+    def side(a, b, c):       # sign of the turn a -> b -> c
+        return ((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
+                - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
+
+    for i in range(len(p0)):
+        j = order[:np.searchsorted(lo[order], hi[i], side="right")]
+        j = j[(j > i + 1) & (hi[j] >= lo[i])]
+        if j.size and np.any((side(p0[i], p1[i], p0[j]) * side(p0[i], p1[i], p1[j]) < 0)
+                             & (side(p0[j], p1[j], p0[i]) * side(p0[j], p1[j], p1[i]) < 0)):
+            return True
+    return False
 
 
 def _diagnose(prob, model, sol, y):
@@ -526,12 +610,21 @@ def _diagnose(prob, model, sol, y):
     scale = _simpson_cumulative(2 * math.pi * S * r * np.abs(p * np.sin(psi)), t,
                                 2 * math.pi * S * r_m * np.abs(p_m * np.sin(psi_m)))[-1]
     force = (shear + press_f + caps) / scale
+    stretch_sq, crossed = (1.0, 1.0), False
+    if prob.shear is not None:      # unclipped lam_phi^2 = r^2 / r_ref^2(A) over the mesh
+        raw = r * r / prob.shear.reference.radius_squared(y[ix["A"]], prob.area)
+        stretch_sq = (float(np.min(raw)), float(np.max(raw)))
+        # a red cell's membrane can fold at its rear rim, where the hoop tension turns
+        # compressive: the meridian must not cross itself (the caps are too small to matter)
+        x_body = _simpson_cumulative(S * np.cos(psi), t, S * np.cos(psi_m))
+        crossed = _self_intersects(x_body, r)
     return dict(area_error=abs(area / prob.area - 1.0),
                 volume_error=abs(volume / prob.volume - 1.0),
                 force_balance_residual=abs(force), max_residual=float(np.max(sol.rms_residuals)),
                 n_nodes=len(t), bvp_status=int(sol.status), bvp_message=sol.message,
                 min_tension=float(np.min(y[ix["sigma"]])), front_tension=float(y[ix["sigma"], -1]),
-                k_rear=float(k_r), k_front=float(k_f))
+                k_rear=float(k_r), k_front=float(k_f), stretch_sq=stretch_sq,
+                self_intersects=crossed)
 
 
 def _verdict(prob, model, diag):
@@ -555,8 +648,15 @@ def _verdict(prob, model, diag):
                         "has no solution there (or the solver found its unphysical branch)")
     if model == "bending" and not diag["front_tension"] > 0.0:
         problems.append(f"front tension {diag['front_tension']:.3g} <= 0: unphysical branch")
+    lo, hi = diag["stretch_sq"]
+    if not (STRETCH_SQ_GUARD[0] < lo and hi < STRETCH_SQ_GUARD[1]):
+        problems.append(f"azimuthal stretch squared {lo:.3g}-{hi:.3g} reaches the guard "
+                        f"{STRETCH_SQ_GUARD} of the material map")
     if problems:
         return Status.NOT_CONVERGED, "not converged: " + "; ".join(problems)
+    if diag["self_intersects"]:
+        return Status.NO_STEADY_STATE, ("no steady shape: the membrane self-intersects (a fold "
+                                        "of the meridian crosses itself; collocation converged)")
     return Status.CONVERGED, (f"converged: residual {diag['max_residual']:.1e}, "
                               f"{diag['n_nodes']} nodes, area/volume errors "
                               f"{diag['area_error']:.1e}/{diag['volume_error']:.1e}, "
@@ -579,7 +679,13 @@ def _failed(prob, status, message, diag, timings, state=None):
                                  "n_nodes", "max_residual") if k in diag}
     return LubricationResult(nu=prob.nu, lam=prob.lam, lam_c=prob.lam_c, ca_b=prob.ca_b,
                              model=prob.model, status=status, message=message, tol=prob.tol,
-                             timings=timings, provenance=provenance(), solver_state=state, **keep)
+                             timings=timings, provenance=provenance(), solver_state=state,
+                             **_membrane_inputs(prob), **keep)
+
+
+def _membrane_inputs(prob):
+    """ca_s and reference of a result: the reference only for a red-cell membrane."""
+    return dict(ca_s=prob.ca_s, reference=None if prob.shear is None else prob.reference)
 
 
 def _result(prob, model, sol, y, diag, message, timings):
@@ -613,7 +719,16 @@ def _result(prob, model, sol, y, diag, message, timings):
     dp_plus_v = delta_p - 8.0 * (1.0 - Q) * length                  # dp+ R/(eta V)
     zero = np.array([0.0])    # shear in the excised caps is neglected by the cap model
     pressure = to_u * np.concatenate((p_v[:1], p_v, p_v[-1:]))
-    tension = to_u * np.concatenate((sigma_v[:1], sigma_v, sigma_v[-1:]))
+    # principal tensions: sigma_v is tau_s for a red-cell membrane; tau_s - tau_phi = 2 G_s f
+    if prob.shear is None:
+        diff_v, stretch = np.zeros_like(sigma_v), np.full(len(sigma_v) + 2, math.nan)
+    else:
+        lam_phi = np.sqrt(prob.shear.stretch_squared(r, y[ix["A"]]))
+        diff_v = 2.0 * shear_modulus(prob.ca_s, Q) * tension_difference(lam_phi)
+        stretch = np.concatenate(([1.0], lam_phi, [1.0]))     # isotropic at the poles
+    mean_v = sigma_v - 0.5 * diff_v
+    tension = to_u * np.concatenate((mean_v[:1], mean_v, mean_v[-1:]))
+    half = to_u * np.concatenate((zero, 0.5 * diff_v, zero))
     return LubricationResult(
         nu=prob.nu, lam=prob.lam, lam_c=prob.lam_c, ca_b=prob.ca_b, model=model,
         status=Status.CONVERGED, message=message,
@@ -627,7 +742,8 @@ def _result(prob, model, sol, y, diag, message, timings):
         shape_class="parachute" if (c_rear > 0 or x[0] > CAP_RADIUS**2) else "bullet",
         s=s, x=x, r=np.concatenate((zero, r, zero)),
         psi=np.concatenate(([-0.5 * math.pi], psi, [0.5 * math.pi])),
-        pressure=pressure, tension=tension,
+        pressure=pressure, tension=tension, tension_s=tension + half,
+        tension_phi=tension - half, stretch_phi=stretch, **_membrane_inputs(prob),
         shear_membrane=to_u * np.concatenate((zero, e_m, zero)),
         shear_wall=to_u * np.concatenate((zero, e_w, zero)),
         force_balance_residual=diag["force_balance_residual"], area_error=diag["area_error"],
@@ -636,7 +752,7 @@ def _result(prob, model, sol, y, diag, message, timings):
         provenance=provenance(),
         solver_state=(model, t, y, sol.p.copy(),
                       dict(delta=prob.delta, area=prob.area, volume=prob.volume,
-                           ca=ca)))
+                           ca=ca, ca_s=prob.ca_s)))
 
 
 # --------------------------------------------------------------------------- 8. driver
@@ -693,8 +809,51 @@ def _bending_by_ca_continuation(prob, sol, y):
     return None, None, diag, status, message
 
 
+def _shear_by_ca_s_continuation(prob, t, y, params):
+    """Red-cell solution from a vesicle solution or guess (t, y, params) of the same model.
+
+    A direct jump to Ca_S first; else continuation in Ca_S from ``CA_S_START`` (where the
+    elastic tensions are ~1e-3 eta U, a small perturbation of the vesicle) down to Ca_S by
+    factors that grow by 1.5 after a success (at most ``CA_S_MAX_FACTOR``) and shrink to their
+    square root after a failure, until the factor falls below ``CA_S_MIN_FACTOR``. At fixed
+    eta V the unknowns need no rescaling between steps: only G_s changes.
+    """
+    CA_S_START = 1e3
+    CA_S_MAX_FACTOR, CA_S_MIN_FACTOR = 10.0, 1.05
+    model = prob.model
+    result = _attempt(prob, model, (t, y, params))
+    if result[3] is Status.CONVERGED or prob.deadline.expired():
+        return result
+    ca_s, factor = math.inf, 3.0
+    while True:
+        nxt = max(prob.ca_s, min(CA_S_START, ca_s / factor))
+        step = replace(prob, ca_s=nxt)
+        result = _attempt(step, model, (t, y, params))
+        if prob.deadline.expired():
+            return (*result[:3], Status.TIME_LIMIT, prob.deadline.message())
+        if result[3] is Status.CONVERGED:
+            if nxt == prob.ca_s:
+                return result
+            ca_s, factor = nxt, min(CA_S_MAX_FACTOR, 1.5 * factor)
+            t, y, params = result[0].x, result[1], result[0].p
+            continue
+        logger.debug("shear continuation to Ca_S=%g failed: %s", nxt, result[4])
+        factor = math.sqrt(factor) if math.isfinite(ca_s) else factor
+        if factor < CA_S_MIN_FACTOR or not math.isfinite(ca_s):
+            where = "from the vesicle" if not math.isfinite(ca_s) else f"at Ca_S = {ca_s:.4g}"
+            return (*result[:3], Status.NOT_CONVERGED,
+                    f"continuation in Ca_S stuck {where} on the way to {prob.ca_s:.4g}: "
+                    f"{result[4]}")
+
+
 def _point(prob: _Problem, initial: LubricationResult | None, cold: bool) -> LubricationResult:
-    """Solve one (nu, lam, Ca_B) from a warm start and/or the spherocylinder."""
+    """Solve one (nu, lam, Ca_B, Ca_S) from a warm start and/or the spherocylinder.
+
+    A warm start of the same model is tried first (a vesicle's, for a red cell, by
+    continuation in Ca_S). Otherwise the vesicle (no shear elasticity) is solved, high-Ca then
+    bending by continuation in Ca, and a red-cell membrane is reached from it by continuation
+    in Ca_S (:func:`_shear_by_ca_s_continuation`).
+    """
     clock = time.perf_counter()
     timings = {}
     state = initial.solver_state if initial is not None and initial.success else None
@@ -702,8 +861,11 @@ def _point(prob: _Problem, initial: LubricationResult | None, cold: bool) -> Lub
     message = "no initial guess (no warm start, cold start not allowed)"
     # 1) same-model warm start
     if state is not None and state[0] == prob.model:
-        sol, y, diag, status, message = _attempt(prob, prob.model,
-                                                 _rescaled_guess(prob, state)[1:])
+        guess = _rescaled_guess(prob, state)[1:]
+        if prob.shear is not None and math.isinf(state[4]["ca_s"]):
+            sol, y, diag, status, message = _shear_by_ca_s_continuation(prob, *guess)
+        else:
+            sol, y, diag, status, message = _attempt(prob, prob.model, guess)
         if status is Status.CONVERGED:
             timings["total"] = time.perf_counter() - clock
             return _result(prob, prob.model, sol, y, diag, "warm start " + message, timings)
@@ -712,8 +874,9 @@ def _point(prob: _Problem, initial: LubricationResult | None, cold: bool) -> Lub
             return _failed(prob, Status.TIME_LIMIT, prob.deadline.message(), diag, timings)
         message = "warm start " + message
         logger.debug("warm start failed: %s", message)
-    # 2) high-Ca from a high-Ca warm start, else from the spherocylinder
-    high = replace(prob, ca_b=math.inf)
+    # 2) high-Ca vesicle from a high-Ca warm start, else from the spherocylinder
+    vesicle = replace(prob, ca_s=math.inf)
+    high = replace(vesicle, ca_b=math.inf)
     guesses = []
     if state is not None and state[0] == "high-Ca" and prob.model == "bending":
         guesses.append(_rescaled_guess(high, state)[1:])
@@ -725,8 +888,12 @@ def _point(prob: _Problem, initial: LubricationResult | None, cold: bool) -> Lub
             break
     timings["high_ca"] = time.perf_counter() - clock
     if status is Status.CONVERGED and prob.model == "bending":
-        sol, y, diag, status, message = _bending_by_ca_continuation(prob, sol, y)
+        sol, y, diag, status, message = _bending_by_ca_continuation(vesicle, sol, y)
         timings["bending"] = time.perf_counter() - clock - timings["high_ca"]
+    if status is Status.CONVERGED and prob.shear is not None:
+        lap = time.perf_counter()
+        sol, y, diag, status, message = _shear_by_ca_s_continuation(prob, sol.x, y, sol.p)
+        timings["shear"] = time.perf_counter() - lap
     timings["total"] = time.perf_counter() - clock
     if status is not Status.CONVERGED:
         logger.info("nu=%.4g lam/lam_c=%.6g %s: %s", prob.nu, prob.lam / prob.lam_c, prob.model,
@@ -787,15 +954,19 @@ ANCHOR_RATIO = 0.98
 MAX_STEP = 0.02
 
 
-def solve_lubrication(nu, lam=None, *, lam_ratio=None, ca_b=math.inf, initial=None, tol=1e-7,
-                      max_nodes=20_000, max_time=None) -> LubricationResult:
+def solve_lubrication(nu, lam=None, *, lam_ratio=None, ca_b=math.inf, ca_s=None,
+                      reference="biconcave", initial=None, tol=1e-7, max_nodes=20_000,
+                      max_time=None) -> LubricationResult:
     r"""Steady shape, speed, extra pressure drop and tension of a vesicle in a tube (lubrication).
 
     Solves the parallel-flow lubrication model of Secomb et al. (1986) in the form of Barakat &
     Shaqfeh (2018b): high-Ca (tension only, ``ca_b=inf``) or with Helfrich bending (finite
-    ``ca_b``). See the module docstring for the method, the acceptance checks and the resource
-    envelope. Without ``initial``, the spherocylinder guess is tried first; if it fails below
-    ``lam_ratio = ANCHOR_RATIO`` the point is reached by continuation from ``ANCHOR_RATIO``.
+    ``ca_b``); a vesicle (``ca_s=None``), or a red cell whose membrane also resists in-plane
+    shear relative to a stress-free ``reference`` shape (finite ``ca_s``, Secomb et al. 1986;
+    :mod:`lubrication.membrane`). See the module docstring for the method, the acceptance
+    checks and the resource envelope. Without ``initial``, the spherocylinder guess is tried
+    first; if it fails below ``lam_ratio = ANCHOR_RATIO`` the point is reached by continuation
+    from ``ANCHOR_RATIO``.
 
     Parameters
     ----------
@@ -812,6 +983,16 @@ def solve_lubrication(nu, lam=None, *, lam_ratio=None, ca_b=math.inf, initial=No
     ca_b : float
         Bending capillary number eta U R0^2 / kappa, 1e-2 <= ca_b <= 1e5 [-]
         (:data:`CA_B_RANGE`); ``math.inf`` (default) for the high-Ca model.
+    ca_s : float, optional
+        Shear capillary number eta U / G_s of a red-cell membrane, :data:`CA_S_RANGE` [-]
+        (U the mean velocity, G_s the shear modulus: 0.2 for U = 1 mm/s, eta = 1.2 mPa s,
+        G_s = 6 µN/m). None (default) or ``math.inf``: a vesicle, the same computation as
+        without this argument.
+    reference : str
+        Stress-free shape of the red-cell membrane: "biconcave" (default; the Evans-Fung disc
+        made to the cell's reduced volume, 0.45 <= nu <= 0.743) or "spheroid" (oblate,
+        0.45 <= nu < 1), its axis along the tube (:func:`lubrication.membrane.reference_shape`).
+        Checked, and ignored for a vesicle.
     initial : LubricationResult, optional
         A converged solution to start from (warm start), preferably at the same nu and a nearby
         lam; it is rescaled to the new clearance. If it fails, the cold start is tried.
@@ -832,6 +1013,19 @@ def solve_lubrication(nu, lam=None, *, lam_ratio=None, ca_b=math.inf, initial=No
 
     Notes
     -----
+    Red-cell membrane: the meridional tension replaces the tension as unknown (
+    :func:`lubrication.equations.rhs_high_ca`); the polar caps stay isotropic (the
+    deviatoric tension vanishes like r^2 at a pole, module :mod:`lubrication.membrane`), so
+    their boundary conditions neglect a relative O(CAP_RADIUS^2) difference of the principal
+    tensions at the rims. Below the measured end of the high-Ca vesicle branch the high-Ca
+    red cell is refused like the vesicle (its own branch end was not measured). Where the hoop
+    tension turns compressive (a disc squeezed into a narrow tube, at its rear rim) and bending
+    is weak, the meridian folds; a solution whose meridian crosses itself is returned with
+    status NO_STEADY_STATE. Measured for the default red cell in a 5 µm tube (G_s = 6 µN/m,
+    kappa = 1.8e-19 J; tests/benchmarks/rbc_shear_lubrication.py): fold-free solutions from 0.1
+    to 1.12 mm/s, reached from the vesicle at lam/lam_c = 0.72 and 0.4 mm/s; above, the rear
+    rim folds over.
+
     Range (measured, tol = 1e-7): every nu in [0.6, 0.98] converges up to lam/lam_c = 0.9999 in
     both models. The high-Ca branch ends where the rear pole flattens: lowest lam/lam_c = 0.909,
     0.838, 0.738, 0.597, 0.346 for nu = 0.6, 0.7, 0.8, 0.9, 0.98 (:data:`HIGH_CA_BRANCH_END`).
@@ -861,7 +1055,7 @@ def solve_lubrication(nu, lam=None, *, lam_ratio=None, ca_b=math.inf, initial=No
     >>> res.success, round(res.V_over_U, 4), res.shape_class
     (True, 1.0096, 'bullet')
     """
-    prob = _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes, max_time)
+    prob = _check_inputs(nu, lam, lam_ratio, ca_b, tol, max_nodes, max_time, ca_s, reference)
     if initial is not None and not isinstance(initial, LubricationResult):
         raise InvalidParameterError("initial", type(initial).__name__,
                                     "a LubricationResult or None")
@@ -895,8 +1089,8 @@ def _solve_point(prob: _Problem, initial) -> LubricationResult:
     return replace(result, timings=timings)
 
 
-def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
-                      max_nodes=20_000, max_step=MAX_STEP,
+def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, ca_s=None,
+                      reference="biconcave", tol=1e-7, max_nodes=20_000, max_step=MAX_STEP,
                       max_time=None) -> list[LubricationResult]:
     r"""Solve a list of confinements by warm-started continuation in lam/lam_c.
 
@@ -918,7 +1112,7 @@ def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
         Bending capillary number eta U R0^2/kappa [-]; ``math.inf`` for the high-Ca model.
     progress : bool
         Show a tqdm progress bar (on stderr).
-    tol, max_nodes :
+    ca_s, reference, tol, max_nodes :
         As in :func:`solve_lubrication`.
     max_step : float
         Largest continuation step in lam/lam_c.
@@ -953,7 +1147,8 @@ def sweep_lubrication(nu, lam_ratios, ca_b=math.inf, progress=True, *, tol=1e-7,
                 reason="lam/lam_c of each point")
     max_step = float(check_range("max_step", max_step, 1e-4, 0.5))
     # the lowest ratio carries the model's range check (its message names the value)
-    base = _check_inputs(nu, None, float(ratios.min()), ca_b, tol, max_nodes, max_time)
+    base = _check_inputs(nu, None, float(ratios.min()), ca_b, tol, max_nodes, max_time, ca_s,
+                         reference)
     results: list[LubricationResult | None] = [None] * ratios.size
     # the bar is closed on any exit (Ctrl-C included), so that it is not redrawn after the
     # command line's last message
