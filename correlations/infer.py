@@ -200,19 +200,29 @@ def _query(m, nu: float, ratio: float, ca_of):
     return q
 
 
+def _speed_length_many(m, nus, ratios, ca_of) -> list:
+    """The map's (V/U, ℓ) :class:`MapValue` pairs at the points (ν, λ/λc), Ca_B =
+    ``ca_of(λ)``; None outside the map or next to a hole. Only these two of the map's
+    quantities are interpolated, and all the points inside at once
+    (:meth:`SolutionMap.quantities_many`): the fit asks hundreds of times, the posterior
+    thousands of points in rounds (query_map computes all eight)."""
+    cas = [ca_of(r * float(critical_confinement(nu))) for nu, r in zip(nus, ratios)]
+    inside = [i for i, (nu, r, c) in enumerate(zip(nus, ratios, cas))
+              if not outside_reason(m, nu, r, c)]
+    out = [None] * len(cas)
+    if inside:
+        pairs = m.quantities_many([nus[i] for i in inside], [ratios[i] for i in inside],
+                                  [cas[i] for i in inside], ("V_over_U", "ell"))
+        for i, pair in zip(inside, pairs):
+            v, ell = pair["V_over_U"], pair["ell"]
+            if v.value is not None and ell.value is not None:
+                out[i] = (v, ell)
+    return out
+
+
 def _speed_length(m, nu: float, ratio: float, ca_of):
-    """The map's (V/U, ℓ) :class:`MapValue` pair at (ν, λ/λc), Ca_B = ``ca_of(λ)``; None
-    outside the map or next to a hole. Only these two of the map's quantities are
-    interpolated, on one stencil: the fit calls this hundreds of times, the posterior
-    thousands (query_map computes all eight)."""
-    ca_b = ca_of(ratio * float(critical_confinement(nu)))
-    if outside_reason(m, nu, ratio, ca_b):
-        return None
-    pair = m.quantities(nu, ratio, ca_b, ("V_over_U", "ell"))
-    v, ell = pair["V_over_U"], pair["ell"]
-    if v.value is None or ell.value is None:
-        return None
-    return v, ell
+    """:func:`_speed_length_many` at one point."""
+    return _speed_length_many(m, [nu], [ratio], ca_of)[0]
 
 
 def _residuals(p, m, target, sigma, ca_of):
@@ -371,13 +381,16 @@ def _posterior_quantities(m, target, sigma, ca_of, d, scales, centre, seed, ca_f
     them. Returns (quantities, notes, method, posterior)."""
 
 
+    def values(pair):
+        return None if pair is None else tuple((v.value, v.error or 0.0) for v in pair)
+
     def model_at(ca):
         def model(nu, ratio):
-            pair = _speed_length(m, nu, ratio, ca)
-            if pair is None:
-                return None
-            return tuple((v.value, v.error or 0.0) for v in pair)
-        return model
+            return values(_speed_length(m, nu, ratio, ca))
+
+        def model_many(nus, ratios):
+            return [values(p) for p in _speed_length_many(m, nus, ratios, ca)]
+        return {"model": model, "model_many": model_many}
 
     start = time.perf_counter()
     box = (m.nus[0], m.nus[-1], m.ratios[0], m.ratios[-1])
@@ -386,12 +399,14 @@ def _posterior_quantities(m, target, sigma, ca_of, d, scales, centre, seed, ca_f
         share = np.gradient(logs) if len(logs) > 1 else np.ones(1)   # trapezoid in log Ca_B
         # the evaluation budget of one posterior shared among the Ca_B nodes
         budget = POSTERIOR_MAX_POINTS // len(m.cas)
-        parts = {c: posterior(model_at(lambda lam, c=c: c), target, sigma, box, seed=seed,
-                              error_model=MAP_ERROR_MODEL, max_points=budget) for c in m.cas}
+        parts = {c: posterior(target=target, sigma=sigma, box=box, seed=seed,
+                              error_model=MAP_ERROR_MODEL, max_points=budget,
+                              **model_at(lambda lam, c=c: c)) for c in m.cas}
         post = mixture(parts, dict(zip(m.cas, share)), seed=seed)
     else:
-        post = posterior(model_at(ca_of), target, sigma, box, seed=seed,
-                         error_model=MAP_ERROR_MODEL, max_points=POSTERIOR_MAX_POINTS)
+        post = posterior(target=target, sigma=sigma, box=box, seed=seed,
+                         error_model=MAP_ERROR_MODEL, max_points=POSTERIOR_MAX_POINTS,
+                         **model_at(ca_of))
     if post.empty:
         return None, [], "", post
     n = min(POSTERIOR_OUTPUT_DRAWS, post.samples["nu"].size)

@@ -109,7 +109,8 @@ def shortest_interval(values, level: float) -> tuple:
 
 
 def posterior(model, target, sigma, box, *, error_model=((1.0, ((1.0, 1.0),)),),
-              max_points: int = 20000, draws: int = 20000, seed: int = 0) -> Posterior:
+              max_points: int = 20000, draws: int = 20000, seed: int = 0,
+              model_many=None) -> Posterior:
     """Integrate the posterior of the module docstring over ``box``.
 
     Parameters
@@ -126,6 +127,10 @@ def posterior(model, target, sigma, box, *, error_model=((1.0, ((1.0, 1.0),)),),
         (ν_min, ν_max, r_min, r_max) of λ/λc = r.
     max_points, draws, seed : int
         Bound on the map evaluations, number of posterior draws and their seed.
+    model_many : callable, optional
+        ``model_many(nus, lam_ratios) -> list`` of what ``model`` gives at each point: the
+        corners of every cell of a refinement round are then evaluated in one call (the map
+        answers many points at once for little more than one). Same result as without.
     """
     nu_lo, nu_hi, r_lo, r_hi = box
     x_lo, x_hi = math.sqrt(1.0 - r_hi), math.sqrt(1.0 - r_lo)
@@ -140,6 +145,22 @@ def posterior(model, target, sigma, box, *, error_model=((1.0, ((1.0, 1.0),)),),
         if key not in cache:
             cache[key] = model(nu, 1.0 - x * x)          # ((f, eps), (f, eps)) or None
         return cache[key]
+
+    def prefetch(cells):
+        """The corners of ``cells`` not yet known, evaluated together in the order
+        :func:`point` would meet them."""
+        if model_many is None:
+            return
+        new = {}
+        for nu0, nu1, x0, x1 in cells:
+            for a in (nu0, nu1):
+                for b in (x0, x1):
+                    key = (round(a, 12), round(b, 12))
+                    if key not in cache and key not in new:
+                        new[key] = (a, b)
+        if new:
+            cache.update(zip(new, model_many([a for a, _ in new.values()],
+                                             [1.0 - b * b for _, b in new.values()])))
 
     def corners(cell):
         nu0, nu1, x0, x1 = cell
@@ -166,6 +187,7 @@ def posterior(model, target, sigma, box, *, error_model=((1.0, ((1.0, 1.0),)),),
     todo = [(a, b, c, d) for a, b in zip(nus[:-1], nus[1:]) for c, d in zip(xs[:-1], xs[1:])]
     leaves, resolved, level = [], True, 0
     while todo:
+        prefetch(todo)
         split = []
         for cell in todo:
             possible, fine = status(cell)
