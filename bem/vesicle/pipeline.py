@@ -28,7 +28,8 @@ settling, NOT_CONVERGED where one was still approaching a state the ladder did n
 start that failed on resolution only (UNRESOLVED: its residual passed) or a mode count fixed by
 the caller is reported as it is.
 
-A converged point is then probed for a second steady state (:func:`_other_branch`): the nearest
+A converged point below :data:`~bem.vesicle.seeds.NEAR_CRITICAL` is then probed for a second
+steady state (:func:`_other_branch`; :data:`BRANCH_REACH` says why not above): the nearest
 stored shape of the other shape class within :data:`BRANCH_REACH`, solved in turn; where it
 converges to that class the point is bistable, and the result says so (``other_branch``, the
 message). ``branch`` asks for one class (only stored shapes of that class are tried, and a
@@ -66,7 +67,11 @@ BANK_REACH = 3.0
 #: Stored shapes tried as starts, nearest first.
 BANK_STARTS = 2
 #: A stored shape of the other shape class within this distance is tried once the solve has
-#: converged: where it converges to that class too, the point is bistable.
+#: converged: where it converges to that class too, the point is bistable. Only below
+#: NEAR_CRITICAL: over 200 random points of the domain the second branch was found at
+#: λ/λc 0.20–0.48 only (docs/data/vesicle_domain*.json), while the probe of a point near λc,
+#: a long shape, cost 4–10 s that found nothing ((0.7, 0.95 λc) 8.2 → 12.7 s, (0.6, 1.94)
+#: 30 → 40 s).
 BRANCH_REACH = 1.5
 #: Modes of the coarse probe of the other branch (a single pair, PROBE_MODES and 2/3 of it):
 #: enough to tell a steady state of the other class (residual ~1e-5, 32 modes at
@@ -249,9 +254,10 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     ``BANK_REACH``) and the solver's own seed (the lubrication shape, continuation in λ/λc near
     lam_c), the bank first below ``NEAR_CRITICAL`` and last above it; each start is refined by
     the mode ladder with its error estimate, and the first that converges is returned. A
-    converged point is then probed for a second steady state: the nearest stored shape of the
-    other shape class within ``BRANCH_REACH``, solved in turn; where it converges to that class
-    the point is bistable, and the result says so (``other_branch``, the message). Where no
+    converged point below ``NEAR_CRITICAL`` is then probed for a second steady state: the
+    nearest stored shape of the other shape class within ``BRANCH_REACH``, solved in turn;
+    where it converges to that class the point is bistable, and the result says so
+    (``other_branch``, the message). Where no
     start converges, their shapes are relaxed in time and refined again, and what the
     relaxations did is the diagnosis of a point that still fails (module docstring).
 
@@ -373,7 +379,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     failures = [f"{lab}: {why}" for lab, why, _ in failed]
     if res is not None:
         other = ({} if branch or initial is not None or not seed_bank or deadline.expired()
-                 else _other_branch(case, res, solve))
+                 or case.lam / case.lam_c > NEAR_CRITICAL else _other_branch(case, res, solve))
         message = res.message
         if other:
             message += (f"; bistable: a {other['shape_class']} steady state also exists "
