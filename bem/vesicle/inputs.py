@@ -74,6 +74,11 @@ class VesicleInputs:
     density_terms: int
     max_iter: int
 
+    @property
+    def lam_ratio(self) -> float:
+        """λ/λc."""
+        return self.lam / self.lam_c
+
 
 def check_vesicle_case(nu, lam, lam_ratio, ca_b):
     """The checked point (nu, lam, lam_c, ca_b) of a vesicle solve from ``lam`` or ``lam_ratio``

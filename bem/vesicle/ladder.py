@@ -297,14 +297,18 @@ class LadderOptions:
     """The choices of :func:`bem.vesicle.solve_vesicle` that the ladder takes as given (not
     checked by :func:`bem.vesicle.check_vesicle_inputs`; their meaning there): Gauss
     nodes per panel ``order``, the Levenberg–Marquardt step tolerance ``xtol``, the arc-length
-    ``density`` ("auto", "uniform" or a key of :data:`bem.vesicle.seeds.DENSITIES`), and
-    ``continuation`` and ``valley`` (None: chosen by regime, module docstring)."""
+    ``density`` ("auto", "uniform" or a key of :data:`bem.vesicle.seeds.DENSITIES`),
+    ``continuation`` and ``valley`` (None: chosen by regime, module docstring), and
+    ``own_seed_fallback``: a given shape that no level can start from is replaced by the
+    solver's own seed (a caller's ``initial``; the pipeline's own starts are tried by the
+    pipeline itself)."""
 
     order: int
     xtol: float
     density: str
     continuation: bool | None
     valley: bool | None
+    own_seed_fallback: bool = True
 
 
 # --- step 1: the plan --------------------------------------------------------------------------
@@ -419,7 +423,7 @@ def plan_ladder(case: VesicleInputs, initial, options: LadderOptions) -> LadderP
     if density not in ("auto", "uniform", *DENSITIES):
         raise InvalidParameterError("density", density,
                                     '"auto", "uniform", "curvature", "bend" or "film"')
-    ratio = case.lam / case.lam_c
+    ratio = case.lam_ratio
     ell = critical_length(case.nu) * ratio           # estimated length L/R (Chen eq. sL)
     long = ell > LONG_VESICLE
     continuation = options.continuation
@@ -796,7 +800,8 @@ def solve_from(case: VesicleInputs, initial, options: LadderOptions,
 
     The steps: the plan (:func:`plan_ladder`), the continuation rungs, the seed, the climb
     through the levels, the result; a given shape that no level can start from is replaced by
-    the solver's own seed (module docstring, the fallbacks)."""
+    the solver's own seed where ``options.own_seed_fallback`` (module docstring, the
+    fallbacks)."""
     budget = _Budget(max_time)
     plan = plan_ladder(case, initial, options)
     try:
@@ -810,7 +815,7 @@ def solve_from(case: VesicleInputs, initial, options: LadderOptions,
     ladder = _climb(case, plan, options, seed, budget.deadline, start.iterations)
     ladder.timings["total_s"] = budget.elapsed()
     if (not ladder.levels and plan.bem_seed and not plan.continuation
-            and not budget.deadline.expired()):
+            and options.own_seed_fallback and not budget.deadline.expired()):
         # a continued shape that cannot start at this lam (its volume re-imposed, the film of
         # (0.98, 0.95 lam_c) closed at 0.98 lam_c): the solver's own seed and continuation
         log.info("solve_vesicle: the given initial shape was rejected (%s); own seed",

@@ -117,7 +117,7 @@ def _starts(case: VesicleInputs, initial, branch: str | None, seed_bank: bool) -
         return own
     deeper = (dataclasses.replace(case, max_modes=MAX_MODES)
               if case.max_modes is None and case.n_modes is None else case)
-    ratio = case.lam / case.lam_c
+    ratio = case.lam_ratio
     bank = [Start(seed.label(), lambda seed=seed: seed.curve(case.lam), deeper)
             for seed in load_seed_bank().nearest(case.nu, ratio, case.ca_b, k=BANK_STARTS,
                                                  shape_class=branch, within=BANK_REACH)]
@@ -131,7 +131,7 @@ def _other_branch(case: VesicleInputs, res: VesicleResult, solve) -> dict:
     case's residual tolerance), which decides whether it stays a steady state of its class; only
     then is it refined by the ladder to the case's tolerances."""
     other = "bullet" if res.shape_class == "parachute" else "parachute"
-    near = load_seed_bank().nearest(case.nu, case.lam / case.lam_c, case.ca_b,
+    near = load_seed_bank().nearest(case.nu, case.lam_ratio, case.ca_b,
                                     shape_class=other, within=BRANCH_REACH)
     if not near:
         return {}
@@ -160,7 +160,7 @@ def _relax(case: VesicleInputs, label: str, curve, budget: float | None) -> dict
         reference = fit_curve(curve.sample, 0.0, 1.0, RELAX_MODES, density=curve.density)
         op = VesicleOperator(case.nu, case.lam, case.ca_b,
                              vesicle_discretisation(RELAX_MODES), reference)
-        modes, flow, info = relax_vesicle(op, reference.modes, RELAX_TIME,
+        _, flow, info = relax_vesicle(op, reference.modes, RELAX_TIME,
                                           tol=case.residual_tol, max_time=budget)
     except InvalidParameterError as exc:          # the shape cannot start a relaxation
         return {"label": label, "curve": None, "t": 0.0, "approaching": False,
@@ -208,15 +208,20 @@ def _first_converged(starts: list[Start], solve, branch: str | None, deadline) -
     return None, "", failed
 
 
+def _by_residual(res: VesicleResult) -> float:
+    """Rank of a failed start's result: its steady residual (NaN last)."""
+    return res.residual if math.isfinite(res.residual) else math.inf
+
+
 def _relaxation_seeds(case: VesicleInputs, failed: list, seed_bank: bool) -> list:
     """Two seeds of the time relaxation, as (label, curve): the final shapes of the two failed
     starts with the smallest steady residual, or, with one only, it and the nearest stored
     shape (with ``seed_bank``)."""
     ranked = sorted(((lab, r) for lab, _, r in failed if r is not None and r.modes.size),
-                    key=lambda x: x[1].residual if math.isfinite(x[1].residual) else math.inf)
+                    key=lambda x: _by_residual(x[1]))
     seeds = [(f"the last shape of start {lab}", r.curve()) for lab, r in ranked[:2]]
     if len(seeds) < 2 and seed_bank:
-        near = load_seed_bank().nearest(case.nu, case.lam / case.lam_c, case.ca_b)
+        near = load_seed_bank().nearest(case.nu, case.lam_ratio, case.ca_b)
         seeds += [(s.label(), s.curve(case.lam)) for s in near]
     return seeds[:2]
 
@@ -364,8 +369,10 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         raise InvalidParameterError("branch", branch, '"parachute", "bullet" or None')
     t_start = time.perf_counter()
     deadline = Deadline(max_time)
+    # a stored, probed or relaxed shape that cannot start is a failed start: the pipeline
+    # tries the own seed itself (once, under its own label)
     options = LadderOptions(order=order, xtol=xtol, density=density, continuation=continuation,
-                            valley=valley)
+                            valley=valley, own_seed_fallback=initial is not None)
 
     def solve(start, inputs=case):
         return solve_from(inputs, start, options, deadline.remaining())
@@ -379,7 +386,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     failures = [f"{lab}: {why}" for lab, why, _ in failed]
     if res is not None:
         other = ({} if branch or initial is not None or not seed_bank or deadline.expired()
-                 or case.lam / case.lam_c > NEAR_CRITICAL else _other_branch(case, res, solve))
+                 or case.lam_ratio > NEAR_CRITICAL else _other_branch(case, res, solve))
         message = res.message
         if other:
             message += (f"; bistable: a {other['shape_class']} steady state also exists "
@@ -387,8 +394,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                         f"branch={other['shape_class']!r}")
         return done(res, seed=label, other_branch=other, message=message,
                     failed_starts=failures)
-    best = min((r for _, _, r in failed if r is not None), default=None,
-               key=lambda r: r.residual if math.isfinite(r.residual) else math.inf)
+    best = min((r for _, _, r in failed if r is not None), default=None, key=_by_residual)
     # the time relaxation is for starts stalled in non-steady minima; a start whose residual
     # passed but whose estimate did not (UNRESOLVED) or a mode count fixed by the caller is a
     # question of resolution, which relaxing at RELAX_MODES cannot answer
@@ -400,7 +406,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         log.warning("solve_vesicle(nu=%g, lam=%g): %s", nu, lam, message)
         if best is None:
             return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=status,
-                                 message=message, tol=tol, residual_tol=residual_tol,
+                                 message=message, tol=case.tol, residual_tol=case.residual_tol,
                                  timings={"total_s": time.perf_counter() - t_start})
         return done(best, status=status, message=message, failed_starts=failures)
     # no start converged: relaxation in time from two seeds, which either reaches a steady
