@@ -113,8 +113,7 @@ class _SpectralSolution(SolverResult):
 
     def curve(self):
         """The fine solution's :class:`bem.shape.SpectralCurve` (centroid at x = 0)."""
-        return SpectralCurve.closed(self.modes, volume=4.0 / 3.0 * math.pi * self.lam**3,
-                                    density=self.density)
+        return SpectralCurve.with_volume_radius(self.modes, self.lam, density=self.density)
 
     def to_dict(self, shape: bool = True) -> dict:
         """:meth:`lubrication.results.SolverResult.to_dict`; with ``shape`` also the ``SHAPE``

@@ -56,8 +56,7 @@ class Seed:
     def curve(self, lam: float) -> SpectralCurve:
         """The stored shape with the volume of a vesicle of confinement ``lam`` (R0 = lam R).
         Raises InvalidParameterError if the stored modes do not close to a positive volume."""
-        return SpectralCurve.closed(self.modes, volume=4.0 / 3.0 * math.pi * lam ** 3,
-                                    density=self.density)
+        return SpectralCurve.with_volume_radius(self.modes, lam, density=self.density)
 
     def label(self) -> str:
         return (f"seed bank ({self.shape_class} at nu={self.nu:g}, lam/lam_c={self.lam_ratio:g}, "

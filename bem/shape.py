@@ -142,6 +142,12 @@ class SpectralCurve:
         return out
 
     @classmethod
+    def with_volume_radius(cls, modes, radius: float, *, density=()) -> SpectralCurve:
+        """:meth:`closed` with the volume of a sphere of ``radius`` [R], centroid at x = 0: the
+        curve of a body of volume radius R0 = ``radius`` (λ for a vesicle or a drop)."""
+        return cls.closed(modes, volume=4.0 / 3.0 * math.pi * radius**3, density=density)
+
+    @classmethod
     def sphere(cls, a: float, n_modes: int = 1, centroid: float = 0.0) -> SpectralCurve:
         """Sphere of radius ``a`` [R] (all modes zero, uniform density)."""
         a = float(check_positive("a", a))

@@ -276,9 +276,8 @@ def _sampled_shape(point: dict, n: int = 201) -> tuple[list, list]:
     """(x, r) of a stored BEM shape (:meth:`bem.shape.SpectralCurve.closed` on its modes and
     density, at the point's volume 4πλ³/3), rear to front pole."""
     from bem.shape import SpectralCurve  # lazy: bem off the estimate's start-up
-    curve = SpectralCurve.closed(point["shape"]["modes"],
-                                 volume=4.0 / 3.0 * math.pi * point["lam"] ** 3,
-                                 density=point["shape"]["density"])
+    curve = SpectralCurve.with_volume_radius(point["shape"]["modes"], point["lam"],
+                                             density=point["shape"]["density"])
     x, r = curve.position(np.linspace(0.0, 1.0, n))
     return x.tolist(), r.tolist()
 
@@ -935,8 +934,8 @@ def _nearest_stored(ctx, nu, lam_ratio, ca_b):
 def _bem_tension(ctx, nu, lam, p):
     """One BEM solve at (ν, λ) started from the stored point ``p``'s shape."""
     from bem.shape import SpectralCurve  # lazy: bem off the estimate's start-up
-    curve = SpectralCurve.closed(p["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
-                                 density=p["shape"]["density"])
+    curve = SpectralCurve.with_volume_radius(p["shape"]["modes"], lam,
+                                             density=p["shape"]["density"])
     return _bem_solve(ctx, nu, lam, CA_B, initial=curve,
                       seed_name=f"stored BEM shape at (ν, λ/λc, Ca_B) = ({p['nu']:g}, "
                                 f"{p['lam_ratio']:g}, {p['ca_b']:g})")

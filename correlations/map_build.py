@@ -298,8 +298,8 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
 
     def neighbour():
         lam = lam_ratio * float(critical_confinement(nu))
-        return SpectralCurve.closed(warm["shape"]["modes"], volume=4.0 / 3.0 * math.pi * lam**3,
-                                    density=warm["shape"]["density"])
+        return SpectralCurve.with_volume_radius(warm["shape"]["modes"], lam,
+                                                density=warm["shape"]["density"])
 
     starts = [("own", lambda: None)]
     if warm is not None:

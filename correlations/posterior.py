@@ -140,11 +140,18 @@ def posterior(model, target, sigma, box, *, error_model=((1.0, ((1.0, 1.0),)),),
     widest, narrowest = max(scales), min(scales)
     cache: dict = {}
 
+    def key(nu, x):
+        return round(nu, 12), round(x, 12)
+
+    def corner_points(cell):
+        nu0, nu1, x0, x1 = cell
+        return [(a, b) for a in (nu0, nu1) for b in (x0, x1)]
+
     def point(nu, x):
-        key = (round(nu, 12), round(x, 12))
-        if key not in cache:
-            cache[key] = model(nu, 1.0 - x * x)          # ((f, eps), (f, eps)) or None
-        return cache[key]
+        k = key(nu, x)
+        if k not in cache:
+            cache[k] = model(nu, 1.0 - x * x)            # ((f, eps), (f, eps)) or None
+        return cache[k]
 
     def prefetch(cells):
         """The corners of ``cells`` not yet known, evaluated together in the order
@@ -152,19 +159,17 @@ def posterior(model, target, sigma, box, *, error_model=((1.0, ((1.0, 1.0),)),),
         if model_many is None:
             return
         new = {}
-        for nu0, nu1, x0, x1 in cells:
-            for a in (nu0, nu1):
-                for b in (x0, x1):
-                    key = (round(a, 12), round(b, 12))
-                    if key not in cache and key not in new:
-                        new[key] = (a, b)
+        for cell in cells:
+            for a, b in corner_points(cell):
+                k = key(a, b)
+                if k not in cache and k not in new:
+                    new[k] = (a, b)
         if new:
             cache.update(zip(new, model_many([a for a, _ in new.values()],
                                              [1.0 - b * b for _, b in new.values()])))
 
     def corners(cell):
-        nu0, nu1, x0, x1 = cell
-        return [point(a, b) for a in (nu0, nu1) for b in (x0, x1)]
+        return [point(a, b) for a, b in corner_points(cell)]
 
     def status(cell):
         """(could the data be met inside, is the likelihood resolved)."""

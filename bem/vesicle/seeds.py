@@ -176,7 +176,7 @@ def spheroid_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
             hi = mid
     e = 0.5 * (lo + hi)
     c = fit_curve(spheroid_curve(1.0, e), 0.0, math.pi, n_modes)
-    return SpectralCurve.closed(c.modes, volume=4.0 / 3.0 * math.pi * lam**3)
+    return SpectralCurve.with_volume_radius(c.modes, lam)
 
 
 def capsule_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
@@ -203,5 +203,5 @@ def capsule_seed(nu: float, lam: float, n_modes: int) -> SpectralCurve:
         return x, a * np.sin(th), np.sin(th), np.cos(th)
 
     c = fit_curve(curve, 0.0, 2.0 * q + length, n_modes)
-    return SpectralCurve.closed(c.modes, volume=4.0 / 3.0 * math.pi * lam**3)
+    return SpectralCurve.with_volume_radius(c.modes, lam)
 

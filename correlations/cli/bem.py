@@ -197,6 +197,7 @@ def cmd_bem_vesicle(args):
     method, pm = _method_and_error(res)
     ok = res.success
     # physical numbers from out: the result's to_dict gives None for them after a failed solve
+    start, _, where = res.seed.partition(" (")       # "seed bank (its point)" and the like
     curv = (f"{res.curvature_rear:.4g} / {res.curvature_front:.4g}" if ok else None)
     rows = [("reduced volume nu", res.nu, "-", "input", ""),
             ("confinement lam = R0/R", res.lam, "-", "input", f"lam/lam_c = {res.lam_ratio:.4g}"),
@@ -212,8 +213,7 @@ def cmd_bem_vesicle(args):
              "eta U/R", method, "Poiseuille: 4"),
             ("rear / front curvature (neg. convex)", curv, "1/R", method, ""),
             ("shape class", out["shape_class"] or None, "", method, _other_branch(res)),
-            ("converged from", res.seed.split(" (")[0] or None, "", "",
-             res.seed[len(res.seed.split(" (")[0]):].strip(" ()")),
+            ("converged from", start or None, "", "", where.strip(" ()")),
             ("steady residual max|u - V e_x|", res.residual, "U", method, ""),
             ("volume / area error", f"{res.volume_error:.1e} / {res.area_error:.1e}"
              if math.isfinite(res.volume_error) else None, "-", "panel quadrature", ""),

@@ -159,19 +159,20 @@ def main(argv=None) -> int:
         if commit is not None and data.get("git_commit") == commit:
             old = {tuple(r["point"]): r for r in data.get("rows", [])}
     rows = []
+
+    def save(**more) -> None:
+        write_json(path, {"seed": args.seed, "domain": DOMAIN, "git_commit": commit, **more,
+                          "rows": rows}, indent=1, sort_keys=False)
+
     print(f"{'nu':>6} {'r':>6} {'Ca_B':>7} {'s':>6} {'status':>14} {'class':>9}  seed", flush=True)
     for point in draw(args.points, args.seed):
         row = old.get(point) or solve_point(*point)
         rows.append(row)
-        write_json(path, {"seed": args.seed, "domain": DOMAIN, "git_commit": commit,
-                          "rows": rows}, indent=1, sort_keys=False)
+        save()
         print(f"{point[0]:6.4f} {point[1]:6.4f} {point[2]:7.2f} {row['seconds']:6.1f} "
               f"{row['status']:>14} {row['shape_class'] or '-':>9}  {row['seed']}", flush=True)
     summary = summarise(rows)
-    write_json(path, {"seed": args.seed, "domain": DOMAIN, "git_commit": commit,
-                      "provenance": provenance(), "machine": machine(), "summary": summary,
-                      "rows": rows},
-               indent=1, sort_keys=False)
+    save(provenance=provenance(), machine=machine(), summary=summary)
     return 0 if print_summary(summary) else 1
 
 
