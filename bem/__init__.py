@@ -5,7 +5,8 @@ matrix), :mod:`bem.quadrature` (panels, singular and near-singular rules), :mod:
 (generating curves and meshes), :mod:`bem.shape` (spectral tangent-angle curves with exact
 curvatures), :mod:`bem.assembly` (bordered single-layer system), :mod:`bem.solve` (rigid
 sphere), :mod:`bem.drop` (clean drop: direct Newton steady state, time relaxation),
-:mod:`bem.membrane` (bending and tension forces), :mod:`bem.newton` (Levenberg–Marquardt with
+:mod:`bem.membrane` (bending and tension forces), :mod:`bem.shear` (shear elasticity of a
+red-cell membrane), :mod:`bem.newton` (Levenberg–Marquardt with
 Broyden updates, shared by drop and vesicle), :mod:`bem.vesicle` (steady vesicle),
 :mod:`bem.vesicle_dynamics` (time integration of a vesicle), :mod:`bem.sweep` (vesicle sweeps
 over the confinement by continuation), :mod:`bem.results` (result dataclasses),

@@ -226,7 +226,9 @@ class VesicleResult(_SpectralSolution, VesicleSolution):
     r"""Steady vesicle (inextensible Helfrich membrane, viscosity ratio 1) in a tube (BEM).
 
     Scalings: R = 1, U the mean velocity of the undisturbed Poiseuille flow, eta the viscosity;
-    ``nu`` reduced volume, ``lam`` = R0/R, ``lam_c`` critical confinement, ``ca_b`` = ηUR0²/κ.
+    ``nu`` reduced volume, ``lam`` = R0/R, ``lam_c`` critical confinement, ``ca_b`` = ηUR0²/κ;
+    a red-cell membrane (shear elasticity, :mod:`bem.shear`) has ``ca_s`` = ηU/G_s and its
+    stress-free shape ``reference`` (inf and None for a vesicle).
     The fields of :class:`lubrication.results.VesicleSolution` (V/U, Δp⁺, length, film,
     tensions, curvatures in the convention of
     :class:`lubrication.results.LubricationResult`, shape class, the profiles s, x, r,
@@ -297,8 +299,9 @@ class VesicleResult(_SpectralSolution, VesicleSolution):
         return int(sum(v.get("evaluations", 0) for v in self.iterations.values()))
 
     def default_stem(self) -> str:
-        """``bem_vesicle_nu<nu>_lam<lam>_cab<ca_b>``."""
-        return f"bem_vesicle_nu{self.nu:.6g}_lam{self.lam:.6g}_cab{self.ca_b:.6g}"
+        """``bem_vesicle_nu<nu>_lam<lam>_cab<ca_b>[_cas<ca_s>_<reference>]``."""
+        stem = f"bem_vesicle_nu{self.nu:.6g}_lam{self.lam:.6g}_cab{self.ca_b:.6g}"
+        return stem if self.reference is None else f"{stem}_cas{self.ca_s:.6g}_{self.reference}"
 
     def to_dict(self, shape: bool = True) -> dict:
         """As for every spectral result; the ``refinement`` history of a result that did not

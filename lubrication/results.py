@@ -249,7 +249,9 @@ class VesicleSolution(SolverResult):
     r"""What a steady vesicle in a tube reports, whichever the solver (lubrication or BEM).
 
     Inputs: ``nu`` reduced volume, ``lam`` = R0/R, ``lam_c`` critical confinement, ``ca_b`` =
-    ηUR0²/κ (``inf`` for the high-Ca lubrication model).
+    ηUR0²/κ (``inf`` for the high-Ca lubrication model); a red-cell membrane
+    (:mod:`lubrication.membrane`) has ``ca_s`` = ηU/G_s and ``reference``, the name of its
+    stress-free shape (``inf`` and None for a vesicle; ``ca_s`` None in ``to_dict``).
 
     Attributes
     ----------
@@ -274,6 +276,8 @@ class VesicleSolution(SolverResult):
     nu: float
     lam_c: float
     ca_b: float
+    ca_s: float = math.inf
+    reference: str | None = None
     ell: float = math.nan
     film_min: float = math.nan
     tension_front: float = math.nan
@@ -331,9 +335,7 @@ class LubricationResult(VesicleSolution):
 
     Inputs
         ``model`` ("high-Ca" or "bending"); ``ca_b`` is None in :meth:`to_dict` for the
-        high-Ca model (inf). Red-cell membrane (:mod:`lubrication.membrane`): ``ca_s`` =
-        ηU/G_s (inf, None in :meth:`to_dict`, for a vesicle) and ``reference``, the name of
-        the stress-free shape (None for a vesicle).
+        high-Ca model (inf); ``ca_s`` and ``reference`` as for every :class:`VesicleSolution`.
     Outcome
         ``status`` (CONVERGED when all acceptance checks passed), ``message``.
     Scalars
@@ -355,8 +357,6 @@ class LubricationResult(VesicleSolution):
     """
 
     model: str
-    ca_s: float = math.inf
-    reference: str | None = None
     Q: float = math.nan
     psi: np.ndarray = profile_field()
     pressure: np.ndarray = profile_field()

@@ -25,10 +25,13 @@ Resource envelope:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from lubrication.checks import Deadline, InvalidParameterError, check_positive, check_range
 from lubrication.geometry import resolve_confinement
+from lubrication.membrane import MembraneShear, reference_shape
+from lubrication.solve import check_shear_inputs
 
 from ..drop import mode_count as _drop_mode_count  # one check, the vesicle's MAX_MODES
 
@@ -59,6 +62,9 @@ class VesicleInputs:
     rung_modes, density_terms, max_iter : int
         Modes of each continuation rung, cosine terms of the arc-length density, iteration
         budget of each Levenberg–Marquardt level.
+    ca_s, reference : float, str
+        Shear capillary number ηU/G_s of a red-cell membrane (inf: a vesicle) and the name of
+        its stress-free shape (:mod:`lubrication.membrane`).
     """
 
     nu: float
@@ -73,11 +79,28 @@ class VesicleInputs:
     rung_modes: int
     density_terms: int
     max_iter: int
+    ca_s: float = math.inf
+    reference: str = "biconcave"
 
     @property
     def lam_ratio(self) -> float:
         """λ/λc."""
         return self.lam / self.lam_c
+
+    @property
+    def shear(self) -> MembraneShear | None:
+        """The membrane's shear elasticity in the solver's units (area in R²), None for a
+        vesicle."""
+        if math.isinf(self.ca_s):
+            return None
+        area = 4.0 * math.pi * (self.lam * self.nu ** (-1.0 / 3.0)) ** 2
+        return MembraneShear(self.ca_s, reference_shape(self.reference, self.nu), area)
+
+    @property
+    def membrane(self) -> dict:
+        """``ca_s`` and ``reference`` as a result stores them (reference None for a vesicle)."""
+        return {"ca_s": self.ca_s,
+                "reference": None if math.isinf(self.ca_s) else self.reference}
 
 
 def check_vesicle_case(nu, lam, lam_ratio, ca_b):
@@ -103,8 +126,8 @@ def mode_count(name, value) -> int:
 
 def check_vesicle_inputs(nu, lam=None, *, lam_ratio=None, ca_b=50.0, n_modes=None,
                          tol=1e-4, tension_tol=1e-2, residual_tol=1e-3, max_modes=None,
-                         rung_modes=32,
-                         density_terms=16, max_iter=40, max_time=None) -> VesicleInputs:
+                         rung_modes=32, density_terms=16, max_iter=40, max_time=None,
+                         ca_s=None, reference="biconcave") -> VesicleInputs:
     """Check the inputs of :func:`bem.vesicle.solve_vesicle` (ranges and the resource envelope
     of the module docstring) without any BEM work. Returns them as a
     :class:`~bem.vesicle.VesicleInputs` of Python numbers (``max_modes`` None stays None: chosen
@@ -134,7 +157,9 @@ def check_vesicle_inputs(nu, lam=None, *, lam_ratio=None, ca_b=50.0, n_modes=Non
     max_iter = int(check_range("max_iter", max_iter, 1, 1000))
     if max_time is not None:
         Deadline(max_time)                               # 0 < max_time < inf
+    ca_s, reference = check_shear_inputs(nu, ca_s, reference)
     return VesicleInputs(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, n_modes=n_modes, tol=tol,
                          tension_tol=tension_tol, residual_tol=residual_tol,
                          max_modes=max_modes, rung_modes=rung_modes,
-                         density_terms=density_terms, max_iter=max_iter)
+                         density_terms=density_terms, max_iter=max_iter, ca_s=ca_s,
+                         reference=reference)

@@ -484,8 +484,8 @@ def _stopped(case: VesicleInputs, budget: _Budget, status: Status, message: str,
              iterations: dict | None = None) -> _Stopped:
     """A start ended before any level, as the :class:`_Stopped` that carries its result."""
     return _Stopped(VesicleResult(
-        nu=case.nu, lam=case.lam, lam_c=case.lam_c, ca_b=case.ca_b, status=status,
-        tol=case.tol, residual_tol=case.residual_tol, iterations=dict(iterations or {}),
+        nu=case.nu, lam=case.lam, lam_c=case.lam_c, ca_b=case.ca_b, **case.membrane,
+        status=status, tol=case.tol, residual_tol=case.residual_tol, iterations=dict(iterations or {}),
         timings={"total_s": budget.elapsed()}, message=message))
 
 
@@ -524,7 +524,8 @@ def _continuation(case: VesicleInputs, plan: LadderPlan, options: LadderOptions,
                                          n_modes=case.rung_modes, tol=RUNG_TOL,
                                          tension_tol=RUNG_TENSION_TOL,
                                          residual_tol=RUNG_RESIDUAL_TOL,
-                                         density_terms=case.density_terms)
+                                         density_terms=case.density_terms,
+                                         ca_s=case.ca_s, reference=case.reference)
         rung = solve_from(rung_case, rung, rung_options, left)
         if budget.deadline.expired():
             raise _time_limit(case, budget, what, iterations)
@@ -666,7 +667,7 @@ def _start_level(case: VesicleInputs, plan: LadderPlan, options: LadderOptions, 
                 case.nu, case.lam, case.ca_b, disc, fit_curve(prev.sample, 0.0, 1.0, n)
                 if seed is None else seed, n, xtol=options.xtol, max_iter=case.max_iter,
                 seed_level=not levels, valley=plan.valley, carrier=as_carrier,
-                deadline=deadline,
+                deadline=deadline, shear=case.shear,
                 coarse=(levels[-1][1], levels[-1][0]) if levels and not as_carrier else None), None
         except InvalidParameterError as exc:
             rejected = exc
@@ -772,7 +773,8 @@ def _result(case: VesicleInputs, ladder: _Ladder, source: str) -> VesicleResult:
     history = [(lv[2]["panels"]["modes"], lv[2]["residual"], lv[2]["V_over_U"],
                 lv[2]["dp_plus_R0"], lv[2]["tension_max"]) for lv in ladder.levels]
     return VesicleResult(
-        nu=nu, lam=lam, lam_c=case.lam_c, ca_b=case.ca_b, status=status, message=message,
+        nu=nu, lam=lam, lam_c=case.lam_c, ca_b=case.ca_b, **case.membrane, status=status,
+        message=message,
         V_over_U=fine["V_over_U"], dp_plus_R0=fine["dp_plus_R0"], dp_plus_R=fine["dp_plus_R"],
         ell=fine["ell"], ell_poles=fine["ell_poles"], film_min=fine["film_min"],
         tension_max=fine["tension_max"],
@@ -825,7 +827,7 @@ def solve_from(case: VesicleInputs, initial, options: LadderOptions,
             return solve_from(case, None, dataclasses.replace(options, continuation=None), left)
     if not ladder.levels:
         return VesicleResult(nu=case.nu, lam=case.lam, lam_c=case.lam_c, ca_b=case.ca_b,
-                             status=ladder.status, message=ladder.message, tol=case.tol,
+                             **case.membrane, status=ladder.status, message=ladder.message, tol=case.tol,
                              residual_tol=case.residual_tol, iterations=ladder.iterations,
                              timings=ladder.timings)
     return _result(case, ladder, source)

@@ -155,7 +155,8 @@ def level_function(op: VesicleOperator, template):
 
 
 def solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, max_iter,
-                seed_level=False, valley=False, carrier=False, deadline=None, coarse=None):
+                seed_level=False, valley=False, carrier=False, deadline=None, coarse=None,
+                shear=None):
     """Levenberg–Marquardt at one resolution from ``seed``
     (:func:`bem.newton.valley_levenberg_marquardt` if ``valley``, with 8 ``max_iter`` cheap
     iterations, else :func:`bem.newton.levenberg_marquardt`); returns (state, op, info), the
@@ -163,10 +164,12 @@ def solve_level(nu, lam, ca_b, disc, seed: SpectralCurve, n_tension, *, xtol, ma
     Jacobian budget); ``carrier``: a valley level that only seeds the next one (one difference
     Jacobian). ``coarse``: (op, state) of the level below (either method): its Jacobian,
     interpolated to this level's nodes, gives the columns of the modes it has, and only the
-    new modes are differenced (:func:`_prolonged_columns`)."""
+    new modes are differenced (:func:`_prolonged_columns`). ``shear``: the red-cell membrane's
+    shear elasticity (:class:`lubrication.membrane.MembraneShear`), passed to the operator
+    (None: a vesicle)."""
     ref = fit_curve(seed.sample, 0.0, 1.0, disc.n_modes, density=seed.density) \
         if seed.n_modes != disc.n_modes else seed
-    op = VesicleOperator(nu, lam, ca_b, disc, ref, n_tension)
+    op = VesicleOperator(nu, lam, ca_b, disc, ref, n_tension, shear=shear)
     template = op.curve(ref.modes).modes.copy()
     fun = level_function(op, template)
     z0, start, J0, extra = op.free(template), None, None, 0

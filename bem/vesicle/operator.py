@@ -61,6 +61,7 @@ import scipy.linalg as sla
 from scipy.optimize import minimize_scalar
 
 from lubrication.checks import InvalidParameterError
+from lubrication.membrane import MembraneShear
 
 from ..assembly import poiseuille
 from ..drop import DropDiscretisation, DropOperator, panels_for
@@ -78,6 +79,7 @@ from ..quadrature import (
     self_rule_panels,
 )
 from ..shape import SpectralCurve
+from ..shear import shear_force
 
 __all__ = ["LSTSQ_COND", "WALL_BODY_LENGTH", "WALL_BODY_PANELS", "WALL_REFINEMENT",
            "VesicleOperator", "level_outputs", "membrane_profile", "range_projector",
@@ -102,16 +104,26 @@ class VesicleOperator(DropOperator):
     Wall, inlet, panel breaks and density are fixed from ``reference`` (as for the drop).
     ``n_tension`` cosine terms of the tension; ``area_mode`` the index of the mode solved for
     the area (default: the free mode with the largest area derivative at ``reference``).
+    ``shear``: the in-plane shear elasticity of a red-cell membrane
+    (:class:`lubrication.membrane.MembraneShear`, its area that of the vesicle,
+    4π(λν^(-1/3))² in R²), whose load :func:`bem.shear.shear_force` joins the
+    bending load; None (default) for a vesicle, whose loads are then those of the bending
+    membrane alone, computed as without the option.
     """
 
     def __init__(self, nu: float, lam: float, ca_b: float, disc: DropDiscretisation,
                  reference: SpectralCurve, n_tension: int | None = None,
-                 area_mode: int | None = None):
+                 area_mode: int | None = None, shear: MembraneShear | None = None):
         super().__init__(lam, 1.0, disc, reference)
         self.nu = float(nu)
         self.ca_b = float(ca_b)
         self.kappa = self.lam**2 / self.ca_b
         self.area = 4.0 * math.pi * (self.lam * self.nu ** (-1.0 / 3.0)) ** 2
+        if shear is not None and not abs(shear.area / self.area - 1.0) <= 1e-12:
+            raise InvalidParameterError(
+                "shear.area", shear.area, f"the vesicle's area {self.area:.12g} (to 1e-12)",
+                "the shear reference is scaled to the cell's area 4 pi (lam nu^(-1/3))^2")
+        self.shear = shear
         self.n_tension = int(n_tension or disc.n_modes)
         modes = reference.with_modes(disc.n_modes)
         self.area_mode = self._pick_area_mode(modes) if area_mode is None else int(area_mode)
@@ -188,7 +200,9 @@ class VesicleOperator(DropOperator):
     def _loads(self, curve: SpectralCurve, g=None):
         """Membrane panels and the load columns Q (interleaved x, r; bending force, then the
         tension modes) with their Δp⁺ columns; with tension coefficients ``g``, the one column
-        of the total load (bending plus that tension)."""
+        of the total load (bending plus that tension). With ``shear``, the first column is
+        the bending plus the shear load (:func:`bem.shear.shear_force`): neither depends on
+        the tension."""
         drop = self.panels(curve)
         if np.max(drop.r) >= 1.0 - 1e-6:
             raise InvalidParameterError("shape", "a membrane touching the wall (closing film)",
@@ -196,6 +210,9 @@ class VesicleOperator(DropOperator):
         tau = self.tau.ravel()
         nd = tau.size
         fb = bending_force(curve, tau, self.kappa)
+        if self.shear is not None:
+            fs = shear_force(curve, tau, self.shear)
+            fb = (fb[0] + fs[0], fb[1] + fs[1])
         if g is None:
             T = tension_basis(curve, tau, self.n_tension)               # (M, 2, nd)
             Q = np.empty((2 * nd, self.n_tension + 1))

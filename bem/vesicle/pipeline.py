@@ -53,7 +53,13 @@ from ..seed_bank import SHAPE_CLASSES, load_seed_bank
 from ..shape import fit_curve
 from ..threads import single_threaded_blas
 from .inputs import MAX_MODES, VesicleInputs, check_vesicle_inputs
-from .ladder import LadderOptions, solve_from
+from .ladder import (
+    RUNG_RESIDUAL_TOL,
+    RUNG_TENSION_TOL,
+    RUNG_TOL,
+    LadderOptions,
+    solve_from,
+)
 from .operator import VesicleOperator, vesicle_discretisation
 from .seeds import NEAR_CRITICAL
 
@@ -89,6 +95,12 @@ RELAX_TIME = 20.0
 #: below this fraction of its largest value over the second half of the run (it decays, as
 #: towards the parachute of (0.6449, 0.281 λc, 43.9): 1.7e-1 -> 9.2e-2 over 20 R/U).
 RELAX_APPROACH = 0.8
+#: Continuation of a red cell in Ca_S = ηU/G_s when no start reaches it directly
+#: (:func:`_shear_continuation`): the first step, where the shear tensions (G_s times strains of
+#: order one) are a fraction of the flow's tensions (ηU times 10-100), and the factor between
+#: steps.
+SHEAR_START = 1.0
+SHEAR_FACTOR = 3.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -208,6 +220,38 @@ def _first_converged(starts: list[Start], solve, branch: str | None, deadline) -
     return None, "", failed
 
 
+def _shear_continuation(case: VesicleInputs, starts: list[Start], solve, branch: str | None,
+                        deadline) -> tuple:
+    """A red cell that no start reached directly: the vesicle (no shear elasticity) from the same
+    starts, then continuation in Ca_S from :data:`SHEAR_START` down to the case's by factors of
+    :data:`SHEAR_FACTOR`, each step a coarse ``rung_modes`` pair at the rungs' loose
+    tolerances from the one before, the last refined by the ladder. Returns (result or None,
+    the label of its start, the reason it failed)."""
+    res, label, _ = _first_converged([dataclasses.replace(s, inputs=dataclasses.replace(
+        s.inputs, ca_s=math.inf)) for s in starts], solve, branch, deadline)
+    if res is None:
+        return None, "", "continuation in Ca_S: the vesicle has no steady state from the starts"
+    steps = []
+    q = SHEAR_START
+    while q > case.ca_s * SHEAR_FACTOR ** 0.5:
+        steps.append(q)
+        q /= SHEAR_FACTOR
+    rung = dataclasses.replace(case, n_modes=case.rung_modes, max_modes=None, tol=RUNG_TOL,
+                               tension_tol=RUNG_TENSION_TOL, residual_tol=RUNG_RESIDUAL_TOL)
+    for q in steps:
+        if deadline.expired():
+            return None, "", f"continuation in Ca_S: {deadline.message()} at Ca_S = {q:.3g}"
+        nxt = solve(res, dataclasses.replace(rung, ca_s=q))
+        if nxt.modes.size == 0 or nxt.status is Status.NO_STEADY_STATE:
+            return None, "", f"continuation in Ca_S failed at Ca_S = {q:.3g}: {nxt.message}"
+        res = nxt
+    final = solve(res, case)
+    path = ", ".join(f"{q:.3g}" for q in steps)
+    if final.success and branch in (None, final.shape_class):
+        return final, f"continuation in Ca_S ({path}) from the vesicle of {label}", ""
+    return None, "", f"continuation in Ca_S ({path}) from the vesicle: {final.message}"
+
+
 def _by_residual(res: VesicleResult) -> float:
     """Rank of a failed start's result: its steady residual (NaN last)."""
     return res.residual if math.isfinite(res.residual) else math.inf
@@ -251,7 +295,8 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
                   order: int = DEFAULT_ORDER, xtol: float = 1e-9, max_iter: int = 40,
                   density: str = "auto", density_terms: int = 16,
                   continuation: bool | None = None, rung_modes: int = 32,
-                  valley: bool | None = None, max_time: float | None = None):
+                  valley: bool | None = None, max_time: float | None = None,
+                  ca_s: float | None = None, reference: str = "biconcave"):
     r"""Steady vesicle (inextensible bending membrane, viscosity ratio 1) on the tube axis.
 
     The pipeline (docs/vesicle-solver.md): without ``initial``, the starts are the nearest
@@ -344,6 +389,16 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     seed_bank : bool
         Try the seed bank's shapes (default). False: the solver's own seed only, a solve that
         depends on no stored solution.
+    ca_s : float, optional
+        Shear capillary number ηU/G_s of a red-cell membrane (:mod:`bem.shear`; the spectrin
+        network's in-plane shear elasticity, Evans 1973, about 0.2 at 1 mm/s for
+        G_s = 6 µN/m): CA_S_RANGE = 1e-2 <= ca_s <= 1e4 of :mod:`lubrication.solve`. Default
+        None: a vesicle (no shear elasticity). A red cell is solved from the same starts; if
+        none converges, from the vesicle by continuation in Ca_S (:func:`_shear_continuation`);
+        neither the time relaxation nor the probe for a second branch is run for it.
+    reference : {"biconcave", "spheroid"}
+        Stress-free shape of a red-cell membrane (:func:`lubrication.membrane.reference_shape`;
+        the biconcave disc needs nu <= 0.743).
 
     Returns
     -------
@@ -363,8 +418,9 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         nu, lam, lam_ratio=lam_ratio, ca_b=ca_b, n_modes=n_modes, tol=tol,
         tension_tol=tension_tol, residual_tol=residual_tol, max_modes=max_modes,
         rung_modes=rung_modes, density_terms=density_terms, max_iter=max_iter,
-        max_time=max_time)
+        max_time=max_time, ca_s=ca_s, reference=reference)
     nu, lam, lam_c, ca_b = case.nu, case.lam, case.lam_c, case.ca_b
+    red_cell = case.shear is not None
     if branch is not None and branch not in SHAPE_CLASSES:
         raise InvalidParameterError("branch", branch, '"parachute", "bullet" or None')
     t_start = time.perf_counter()
@@ -384,9 +440,14 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     starts = _starts(case, initial, branch, seed_bank)
     res, label, failed = _first_converged(starts, solve, branch, deadline)
     failures = [f"{lab}: {why}" for lab, why, _ in failed]
+    if res is None and red_cell and initial is None and not deadline.expired():
+        res, label, why = _shear_continuation(case, starts, solve, branch, deadline)
+        if res is None:
+            failures.append(why)
     if res is not None:
         other = ({} if branch or initial is not None or not seed_bank or deadline.expired()
-                 or case.lam_ratio > NEAR_CRITICAL else _other_branch(case, res, solve))
+                 or red_cell or case.lam_ratio > NEAR_CRITICAL
+                 else _other_branch(case, res, solve))
         message = res.message
         if other:
             message += (f"; bistable: a {other['shape_class']} steady state also exists "
@@ -399,14 +460,15 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     # passed but whose estimate did not (UNRESOLVED) or a mode count fixed by the caller is a
     # question of resolution, which relaxing at RELAX_MODES cannot answer
     if (initial is not None or case.n_modes is not None or deadline.expired() or best is None
-            or best.status is Status.UNRESOLVED):
+            or best.status is Status.UNRESOLVED or red_cell):
         status = leading_status([r.status if r is not None else Status.REJECTED_START
                                  for _, _, r in failed]) if failed else Status.REJECTED_START
         message = "; ".join(failures) if failures else "no start"
         log.warning("solve_vesicle(nu=%g, lam=%g): %s", nu, lam, message)
         if best is None:
-            return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, status=status,
-                                 message=message, tol=case.tol, residual_tol=case.residual_tol,
+            return VesicleResult(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, **case.membrane,
+                                 status=status, message=message, tol=case.tol,
+                                 residual_tol=case.residual_tol,
                                  timings={"total_s": time.perf_counter() - t_start})
         return done(best, status=status, message=message, failed_starts=failures)
     # no start converged: relaxation in time from two seeds, which either reaches a steady

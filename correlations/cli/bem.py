@@ -43,7 +43,7 @@ __all__ = ["add_bem_parser", "cmd_bem_drop", "cmd_bem_sphere", "cmd_bem_vesicle"
 _OPTIONS = {"lam": "--lam", "lam_ratio": "--lam-ratio", "lams": "--lam", "lam_ratios":
             "--lam-ratio", "ca": "--ca", "ca_b": "--ca-b", "nu": "--nu", "panels": "--panels",
             "tol": "--tol", "tension_tol": "--tension-tol", "residual_tol": "--residual-tol",
-            "n_modes": "--modes",
+            "n_modes": "--modes", "ca_s": "--ca-s", "reference": "--reference",
             "max_modes": "--max-modes", "max_time": "--max-time"}
 
 
@@ -192,6 +192,7 @@ def cmd_bem_vesicle(args):
     with _options_named():           # the solver checks its inputs before any BEM work
         res = solve_vesicle(args.nu, args.lam, lam_ratio=args.lam_ratio, ca_b=args.ca_b,
                             branch=args.branch, seed_bank=args.seed_bank,
+                            ca_s=args.ca_s, reference=args.reference,
                             max_time=args.max_time, **_vesicle_solver_options(args))
     out = _shape_result_json(res, "vesicle", args)
     method, pm = _method_and_error(res)
@@ -202,6 +203,8 @@ def cmd_bem_vesicle(args):
     rows = [("reduced volume nu", res.nu, "-", "input", ""),
             ("confinement lam = R0/R", res.lam, "-", "input", f"lam/lam_c = {res.lam_ratio:.4g}"),
             ("bending capillary number Ca_B = eta U R0^2/kappa", res.ca_b, "-", "input", ""),
+            *([("shear capillary number Ca_S = eta U/G_s", res.ca_s, "-", "input",
+                f"stress-free shape: {res.reference}")] if res.reference else []),
             ("speed V", out["V_over_U"], "U", method, pm("V_over_U")),
             ("extra pressure drop dp+", out["dp_plus_R0"], "eta U/R0", method,
              pm("dp_plus_R0")),
@@ -363,6 +366,13 @@ def _vesicle_options(p, sweep: bool) -> None:
         p.add_argument("--no-seed-bank", action="store_false", dest="seed_bank",
                        help="start from the solver's own model seeds only (lubrication shape, "
                             "continuation), not from the stored converged shapes")
+        p.add_argument("--ca-s", type=finite_float, default=None, dest="ca_s",
+                       help="shear capillary number eta U/G_s of a red-cell membrane (in-plane "
+                            "shear elasticity, Evans 1973), 0.01 to 1e4 (default: none, a "
+                            "vesicle) [-]")
+        p.add_argument("--reference", choices=("biconcave", "spheroid"), default="biconcave",
+                       help="stress-free shape of the red-cell membrane with --ca-s: the "
+                            "Evans-Fung disc (default, nu <= 0.743) or an oblate spheroid")
     add_max_time_option(p)
 
 

@@ -241,3 +241,39 @@ def test_vesicle_json_names_its_start_and_the_other_branch(cli):
                          "--no-seed-bank")
     assert code == 0, err
     assert json.loads(out)["seed"] == "lubrication"
+
+
+@pytest.mark.parametrize("argv, needles", [
+    (["--ca-s", "-1"], ["--ca-s", "-1", "0.01"]),
+    (["--ca-s", "nan"], ["--ca-s"]),
+    (["--ca-s", "0.2", "--reference", "torus"], ["--reference", "torus"]),
+    (["--ca-s", "0.2", "--nu", "0.9"], ["nu", "0.743", "spheroid"]),
+])
+def test_red_cell_options_are_checked_before_any_work(cli_usage_error, argv, needles):
+    """Shear number, reference shape and a reduced volume the biconcave family cannot reach:
+    exit 2 with one line naming the option, at once."""
+    base = ["bem", "vesicle", "--lam-ratio", "0.7"]
+    if "--nu" not in argv:
+        base += ["--nu", "0.61"]
+    t0 = time.perf_counter()
+    line = cli_usage_error(*base, *argv)
+    assert time.perf_counter() - t0 < 1.0
+    for n in needles:
+        assert n in line, (n, line)
+
+
+def test_red_cell_table_and_json_carry_the_shear_number(cli):
+    """A red cell at a coarse pair (loose tolerances: the pair is far from converged): the
+    table shows Ca_S and the reference shape, the JSON stores them, and its V/U lies within
+    three times its pair estimate of the default solve's 1.14700 (72 modes, estimated error
+    5e-6; the pair's own error bar is the tolerance, not a tuned one)."""
+    loose = ("--modes", "48", "--tol", "0.1", "--tension-tol", "0.5", "--residual-tol", "0.01")
+    code, out, err = cli("bem", "vesicle", "--nu", "0.61", "--lam-ratio", "0.7", "--ca-s", "0.2",
+                         *loose, "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["ca_s"] == 0.2 and d["reference"] == "biconcave"
+    assert abs(d["V_over_U"] - 1.14700) <= 3 * d["error_estimate"]["V_over_U"] + 1e-5
+    code, out, err = cli("bem", "vesicle", "--nu", "0.61", "--lam-ratio", "0.7", "--ca-s", "0.2",
+                         *loose)
+    assert "shear capillary number Ca_S" in out and "biconcave" in out
