@@ -200,19 +200,47 @@ class BuildInputError(InvalidParameterError):
         ValueError.__init__(self, f"{exc} (a value of the {method} lines of the build)")
 
 
+#: The BEM option of a red-cell build: the cell's ratio of shear to bending stiffness
+#: β = G_s R0²/κ = Ca_B/Ca_S, a constant of one cell (232 for the estimate's default red cell:
+#: G_s 6 µN/m, R0 2.78 µm, κ 2e-19 J), so that each point has Ca_S = Ca_B/β and a line in Ca_B is
+#: one physical cell at different velocities (:func:`point_options`).
+SHEAR_RATIO = "shear_ratio"
+
+
+def point_options(options: dict, ca_b: float) -> dict:
+    """The solver options of one BEM point at ``ca_b``: a :data:`SHEAR_RATIO` β becomes the
+    point's ``ca_s`` = ca_b/β; other options pass unchanged."""
+    if SHEAR_RATIO not in options:
+        return options
+    out = dict(options)
+    beta = out.pop(SHEAR_RATIO)
+    if "ca_s" in out:
+        raise InvalidParameterError(SHEAR_RATIO, beta, "either shear_ratio or ca_s",
+                                    "shear_ratio sets each point's ca_s = ca_b/shear_ratio")
+    from lubrication.solve import CA_S_RANGE  # lazy: scipy off the build's start-up
+    lo, hi = CA_S_RANGE
+    check_range(SHEAR_RATIO, beta, ca_b / hi, ca_b / lo,
+                reason=f"G_s R0^2/kappa = Ca_B/Ca_S of the cell; at ca_b={ca_b:g} the solver's "
+                       f"{lo:g} <= Ca_S <= {hi:g}")
+    out["ca_s"] = ca_b / float(beta)
+    return out
+
+
 def _bem_option_names() -> tuple:
     """The solver options of the BEM lines: those :func:`bem.vesicle.check_vesicle_inputs`
-    checks besides the point and ``max_time`` (the build sets those)."""
+    checks besides the point and ``max_time`` (the build sets those), and
+    :data:`SHEAR_RATIO`."""
     from bem.vesicle import check_vesicle_inputs  # lazy: bem and scipy off the build's start-up
     return tuple(k for k, p in inspect.signature(check_vesicle_inputs).parameters.items()
                  if p.default is not inspect.Parameter.empty
-                 and k not in ("lam", "lam_ratio", "ca_b", "max_time"))
+                 and k not in ("lam", "lam_ratio", "ca_b", "max_time")) + (SHEAR_RATIO,)
 
 
 def _check_bem_point(nu, lam_ratio, ca_b, options, max_time) -> None:
     """The check of ``vesicle-tube bem vesicle`` (:func:`bem.vesicle.check_vesicle_inputs`)."""
     from bem.vesicle import check_vesicle_inputs  # lazy: bem and scipy off the build's start-up
-    check_vesicle_inputs(nu, lam_ratio=lam_ratio, ca_b=ca_b, max_time=max_time, **options)
+    check_vesicle_inputs(nu, lam_ratio=lam_ratio, ca_b=ca_b, max_time=max_time,
+                         **point_options(options, ca_b))
 
 
 def _check_lubrication_point(nu, lam_ratio, ca_b, options, max_time) -> None:
@@ -295,6 +323,7 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     of the next point or None)."""
     from bem import vesicle  # lazy: scipy and the BEM off the build's input checks
     from bem.shape import SpectralCurve  # lazy: with bem.vesicle
+    options = point_options(options, ca_b)
 
     def neighbour():
         lam = lam_ratio * float(critical_confinement(nu))
@@ -338,7 +367,8 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     message = res.message if res.success else "; ".join(failures)
     d = res.to_dict(shape=False)
     est = res.error_estimate if res.success else {}
-    fields = {"lam": d["lam"], "lam_c": d["lam_c"], "success": bool(res.success),
+    fields = {"lam": d["lam"], "lam_c": d["lam_c"], "ca_s": d["ca_s"],
+              "reference": d["reference"], "success": bool(res.success),
               "status": status.value, "message": message, **{q: d.get(q) for q in QUANTITIES},
               "shape_class": d["shape_class"], "failed_starts": failures if res.success else [],
               "error_estimate": {q: (None if est.get(q) is None or not math.isfinite(est[q])

@@ -121,6 +121,21 @@ def test_an_unknown_solver_option_is_refused():
         check_build(make_grid([0.9], [0.3], [50.0], ["bem"]), {"bem": {"n_mode": 8}})
 
 
+def test_a_red_cell_build_gives_each_point_its_own_shear_number():
+    """``shear_ratio`` β = Ca_B/Ca_S: each point solves with ca_s = ca_b/β (one physical cell
+    at several velocities), checked with the BEM's own Ca_S range before any work."""
+    assert map_build.point_options({"shear_ratio": 250.0, "tol": 1e-3}, 50.0) == \
+        {"tol": 1e-3, "ca_s": 0.2}
+    assert map_build.point_options({"tol": 1e-3}, 50.0) == {"tol": 1e-3}
+    check_build(make_grid([0.61], [0.5], [2.5, 5e4], ["bem"]), {"bem": {"shear_ratio": 250.0}})
+    with pytest.raises(InvalidParameterError, match="shear_ratio.*ca_b=1"):  # Ca_S 0.004
+        check_build(make_grid([0.61], [0.5], [1.0], ["bem"]), {"bem": {"shear_ratio": 250.0}})
+    with pytest.raises(InvalidParameterError, match="shear_ratio"):
+        check_build(make_grid([0.61], [0.5], [50.0], ["bem"]), {"bem": {"shear_ratio": -1.0}})
+    with pytest.raises(InvalidParameterError, match="nu"):              # no biconcave disc
+        check_build(make_grid([0.9], [0.5], [50.0], ["bem"]), {"bem": {"shear_ratio": 250.0}})
+
+
 def test_a_folder_whose_build_json_records_refused_values_says_what_to_do(
         cli_usage_error, tmp_path, no_solver):
     """A folder built before the checks with --bem-tol -1 (every point stored as failed): its
