@@ -36,6 +36,8 @@ import math
 import time
 from pathlib import Path
 
+import numpy as np
+
 from correlations.estimate import RBC_DEFAULTS
 from correlations.viscosity import viscosity_single_file_chen2020
 from lubrication.geometry import cell_from_volume_area, confinement_from_diameter
@@ -53,6 +55,8 @@ TUBE_HEMATOCRIT = 0.3
 DIAMETERS_UM = (4.0, 5.0, 6.0, 8.0)
 #: from Ca_S = 0.012 (the solver's lower bound is 0.01) to 1.6
 VELOCITIES_MM_S = (0.06, 0.1, 0.2, 0.5, 1.0, 2.0, 4.0, 8.0)
+#: besides these, a red cell's row has the smallest squared azimuthal stretch of its membrane,
+#: (r/r_ref)^2 at equal area coordinate (``stretch_phi_sq_min``)
 QUANTITIES = ("V_over_U", "dp_plus_R0", "ell", "film_min", "tension_front", "tension_rear",
               "tension_max", "shape_class", "residual")
 
@@ -88,9 +92,22 @@ def row_of(res, d_um, U_mm_s, seconds) -> dict:
     if res.success:
         row.update({k: getattr(res, k) for k in QUANTITIES})
         row["rear_over_front"] = res.tension_rear / res.tension_front
+        if shear_of(res) is not None:
+            from bem.shear import stretch_squared  # lazy: with the solver
+            tau = np.linspace(0.0, 1.0, 2001)
+            row["stretch_phi_sq_min"] = float(np.min(stretch_squared(res.curve(), tau,
+                                                                     shear_of(res))))
         row["eta_rel"] = float(viscosity_single_file_chen2020(res.dp_plus_R0, d_um, R0,
                                                               TUBE_HEMATOCRIT))
     return row
+
+
+def shear_of(res):
+    """The red cell's shear elasticity in the solver's units (None for a vesicle)."""
+    from bem.vesicle import check_vesicle_inputs  # lazy: with the solver
+    return check_vesicle_inputs(res.nu, res.lam, ca_b=res.ca_b,
+                                ca_s=None if res.reference is None else res.ca_s,
+                                reference=res.reference or REFERENCE).shear
 
 
 def key(d_um, U_mm_s, shear) -> str:
