@@ -44,10 +44,11 @@ from lubrication.geometry import (cell_from_volume_area, check_passes, check_red
                                   critical_length, critical_length_um)
 
 from .formatting import format_value_error
-from .registry import (BEM_DEFAULT_CA_B, LUBRICATION_DEFAULT_CA_B, MAP, MAP_DEFAULT_CA_B, METHODS,
-                       QUANTITIES, SOLVER_COST, SOLVERS, Answer, MethodNotApplicable,
-                       SolverNotConverged, check_output)
-from .solution_map import SolutionMap, load_map
+from .registry import (BEM_DEFAULT_CA_B, LUBRICATION_DEFAULT_CA_B, MAP, MAP_DEFAULT_CA_B,
+                       MEMBRANES, METHODS, QUANTITIES, SHEAR_RATIO_RTOL, SOLVER_COST, SOLVERS,
+                       Answer, MethodNotApplicable, SolverNotConverged, check_output,
+                       membrane_mismatch)
+from .solution_map import RED_CELL_MAP, SolutionMap, load_map
 
 __all__ = ["RBC_DEFAULTS", "PHYSICAL_BOUNDS", "RUPTURE_TENSION_MN_M", "UNITS", "Quantity",
            "Estimate", "estimate", "estimate_dimensionless", "physical_scales"]
@@ -59,6 +60,7 @@ RBC_DEFAULTS = {
     "velocity_mm_s": 1.0,         # mean flow velocity U; capillary RBC speeds ~1 mm/s
     "plasma_viscosity_mpas": 1.2,  # plasma at 37 degC
     "bending_modulus_j": 2e-19,   # Chen et al. 2020, Evans 1983
+    "shear_modulus_un_m": 6.0,    # membrane shear modulus G_s, Hochmuth & Waugh 1987
 }
 
 #: Accepted range of each physical input, ``name: (lo, hi, reason)`` (closed bounds). They are
@@ -75,6 +77,8 @@ PHYSICAL_BOUNDS = {
                                           "plasma is 1.2 mPa s"),
     "bending_modulus_j": (1e-24, 1e-12, "from 1e-3 kT to 1e8 kT; lipid bilayers and red cells "
                                         "have 1e-20 to 1e-18 J"),
+    "shear_modulus_un_m": (1e-6, 1e6, "from 1 pN/m to 1 N/m; red cells have 4-10 uN/m "
+                                      "(Hochmuth & Waugh 1987)"),
 }
 
 #: Lysis tension range of lipid bilayers and RBC membranes [mN/m] (Rawicz et al. 2000; Evans et al. 2003).
@@ -99,7 +103,7 @@ UNITS = {
     "tube_hematocrit": "-", "discharge_hematocrit": "-",
     "eta_rel": "-", "R0_um": "um", "d_c_um": "um", "L_c_um": "um", "V_mm_s": "mm/s",
     "dp_plus_Pa": "Pa", "film_nm": "nm", "length_um": "um", "tension_front_mN_m": "mN/m",
-    "tension_max_mN_m": "mN/m",
+    "tension_max_mN_m": "mN/m", "ca_s": "-", "shear_ratio": "-",
 }
 
 
@@ -159,7 +163,8 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
             solvers: tuple = (), log: dict | None = None) -> Quantity:
     """Evaluate ``quantity`` with the first valid method of the table (see module docstring).
 
-    Rows of an enabled solver come first, then the map rows when ``solvers`` holds
+    Only the rows of the case's membrane (``known["membrane"]``, a vesicle when absent) take
+    part. Rows of an enabled solver come first, then the map rows when ``solvers`` holds
     :data:`~correlations.registry.MAP` (in table order), then the closed forms; rows of other
     solvers are skipped, but when one would have been valid that is recorded per quantity in
     ``log["covers"]``. Solver failures go to ``log["failures"]``, rows without a value here to
@@ -167,11 +172,12 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
     """
     log = {} if log is None else log
     reasons, fallback = [], None
-    rows = sorted((m for m in METHODS if m.quantity == quantity and
+    membrane = known.get("membrane", "vesicle")     # rows of the other membrane never answer
+    rows = sorted((m for m in METHODS if m.quantity == quantity and membrane in m.membranes and
                    (m.solver is None or m.solver in solvers)), key=lambda m: m.solver is None)
     for m in METHODS:
         if (m.quantity == quantity and m.solver in SOLVERS and m.solver not in solvers
-                and m.validity.contains(**known)):
+                and membrane in m.membranes and m.validity.contains(**known)):
             log.setdefault("covers", {}).setdefault(quantity, set()).add(m.solver)
     for m in rows:
         missing = [r for r in m.requires if r not in known]
@@ -193,6 +199,9 @@ def _select(quantity: str, known: dict, extrapolated: dict, extrapolate: bool,
         if extrapolate and m.solver != MAP and (fallback is None or dist < fallback[0]):
             fallback = (dist, m)
     note = "no valid method (" + " | ".join(reasons) + ")" if reasons else "no method"
+    if not reasons and membrane == "red-cell":
+        note = ("no valid method (for a red cell only the red-cell map and the solvers answer; "
+                "the closed-form laws are vesicle results)")
     if fallback is None:
         return Quantity(None, UNITS[quantity], None, False, "", note)
     m = fallback[1]
@@ -293,15 +302,16 @@ def _hematocrits(tube_hematocrit, discharge_hematocrit) -> dict:
 
 
 def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapolate: bool,
-          solvers: tuple, log: dict, solution_map=None):
+          solvers: tuple, log: dict, solution_map=None, cell: dict | None = None):
     """Geometry state, then every quantity of the table; returns (state, quantities).
 
     ``log`` collects which disabled solvers would apply and which enabled ones failed, and
     where the map had no value. The map rows take part unless ``solution_map`` is False.
+    ``cell``: the red cell's entries of the state (:func:`_red_cell`), None for a vesicle.
     """
     lam_c = check_passes(nu, lam)
     state = {"nu": nu, "lam": lam, "lam_c": lam_c, "delta": 1.0 - lam / lam_c,
-             "ell_c": critical_length(nu), **hematocrits}
+             "ell_c": critical_length(nu), **hematocrits, **(cell or {})}
     if ca_b is not None:
         state["ca_b"] = ca_b
     if solution_map is not False:
@@ -339,7 +349,7 @@ def _core(nu: float, lam: float, ca_b, hematocrits: dict, diameter_um, extrapola
 
 
 def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
-                           tube_hematocrit: float | None = None,
+                           ca_s: float | None = None, tube_hematocrit: float | None = None,
                            discharge_hematocrit: float | None = None,
                            extrapolate: bool = False, solvers: tuple = (),
                            solution_map=None) -> Estimate:
@@ -355,6 +365,11 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
         Bending capillary number eta U R0^2/kappa [-]; when omitted the correlations of Chen et
         al. 2020 are assumed to apply (they hold for Ca_B >= ~10), and the solution map and the
         solvers use Ca_B = 50 (Chen et al. 2020's value), as the output states.
+    ca_s : float, optional
+        Shear capillary number eta U/G_s of a red-cell membrane [-] (needs ``ca_b``): the case
+        is then a red cell with beta = Ca_B/Ca_S, estimated as in :func:`estimate` (the
+        red-cell map where its beta matches, an enabled solver, no closed-form vesicle law).
+        Default None: a vesicle.
     tube_hematocrit, discharge_hematocrit : float, optional
         At most one, a fraction in [0, 1); enables the single-file apparent viscosity.
     extrapolate : bool
@@ -385,7 +400,8 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
     >>> e.regime.split(" (")[0], round(e["V_over_U"], 3), e.quantities["V_over_U"].method
     ('near-critical', 1.06, 'near_critical_barakat2018a')
     """
-    for name, x in (("nu", nu), ("lam", lam), ("ca_b", ca_b), ("tube_hematocrit", tube_hematocrit),
+    for name, x in (("nu", nu), ("lam", lam), ("ca_b", ca_b), ("ca_s", ca_s),
+                    ("tube_hematocrit", tube_hematocrit),
                     ("discharge_hematocrit", discharge_hematocrit)):
         _scalar(name, x)
     hematocrits = _hematocrits(tube_hematocrit, discharge_hematocrit)
@@ -393,13 +409,26 @@ def estimate_dimensionless(nu: float, lam: float, ca_b: float | None = None, *,
     if ca_b is not None:
         ca_b = float(check_positive("ca_b", ca_b))
     solvers, log = _check_solvers(solvers), {}
+    cell = None
+    if ca_s is not None:
+        ca_s = float(check_positive("ca_s", ca_s))
+        if ca_b is None:
+            raise InvalidParameterError("ca_s", ca_s, "given with ca_b",
+                                        "a red cell's beta = Ca_B/Ca_S needs both: give --ca-b")
+        _check_red_cell_solve(nu, ca_s, solvers, "ca_s", "nu")
+        cell = {"membrane": "red-cell", "ca_s": ca_s, "shear_ratio": ca_b / ca_s,
+                "default_cell": _default_cell()}
     solution_map = _check_solution_map(solution_map)
+    _check_map_membrane(solution_map, cell)
     state, quantities = _core(nu, lam, ca_b, hematocrits, None, extrapolate, solvers, log,
-                              solution_map)
+                              solution_map, cell)
     quantities["ca_b"] = _ca_b_quantity(ca_b, solvers, log)
     inputs = {"nu": nu, "lam": lam, "ca_b": ca_b, **hematocrits}
+    if cell is not None:    # a vesicle's inputs stay those of the estimate without red cells
+        quantities.update(_red_cell_quantities(ca_s, cell["shear_ratio"], given_ca_s=True))
+        inputs.update(ca_s=ca_s, membrane="red-cell")
     return Estimate(inputs=inputs, quantities=quantities, regime=_regime(lam, state["delta"]),
-                    notes=_notes(quantities, ca_b, log), provenance=provenance(),
+                    notes=_notes(quantities, ca_b, log, state), provenance=provenance(),
                     converged=not log.get("failures"))
 
 
@@ -443,10 +472,101 @@ def _check_solution_map(choice):
                                 "a packed map file or a SolutionMap")
 
 
-def _notes(quantities: dict, ca_b, log: dict) -> tuple:
+def _check_map_membrane(solution_map, cell: dict | None) -> None:
+    """A map given by the caller (a path or a map, loaded by :func:`_check_solution_map`) is
+    of the case's membrane, checked before any work: a vesicle map never answers for a red
+    cell, nor a red-cell map for a vesicle (InvalidParameterError naming ``solution_map``). A
+    red-cell map of another shear ratio is no error: its rows have no value and say why."""
+    if not isinstance(solution_map, SolutionMap):
+        return
+    red_cell = cell is not None
+    if (solution_map.membrane is not None) != red_cell:
+        kind = "a red-cell map" if solution_map.membrane is not None else "a vesicle map"
+        raise InvalidParameterError(
+            "solution_map", solution_map.source,
+            f"a {'red-cell' if red_cell else 'vesicle'} map for a "
+            f"{'red cell' if red_cell else 'vesicle'}",
+            f"it is {kind}; give the map of the cell's membrane, or change the membrane")
+
+
+def _default_cell() -> tuple:
+    """``(beta, description)`` of the default red cell (:data:`RBC_DEFAULTS`), the cell the
+    shipped red-cell slice was built for: named in the reason when a cell's beta differs."""
+    d = RBC_DEFAULTS
+    R0 = (3.0 * d["volume_fl"] / (4.0 * math.pi)) ** (1.0 / 3.0)       # [µm]
+    beta = physical_scales(R0, 1.0, 1.0, 1.0, d["bending_modulus_j"],
+                           d["shear_modulus_un_m"])["shear_ratio"]
+    return beta, (f"G_s {d['shear_modulus_un_m']:g} uN/m, kappa {d['bending_modulus_j']:g} J, "
+                  f"{d['volume_fl']:g} fL, the default red cell")
+
+
+def _check_red_cell_solve(nu: float, ca_s: float, solvers: tuple, ca_s_name: str, nu_name: str,
+                          ca_s_range=None) -> None:
+    """With a solver enabled, a red cell the solvers can take, checked before any work: Ca_S
+    within :data:`lubrication.solve.CA_S_RANGE` (``ca_s_range``: the same range expressed in
+    the caller's input, ``(value, lo, hi, reason)``) and nu where the stress-free Evans–Fung
+    disc exists (:func:`lubrication.membrane.reference_nu_range`)."""
+    if not solvers:
+        return
+    from lubrication.membrane import reference_nu_range   # lazy: scipy, numba
+    from lubrication.solve import CA_S_RANGE     # lazy: scipy
+    lo, hi = CA_S_RANGE
+    if not lo <= ca_s <= hi:
+        value, vlo, vhi, reason = ca_s_range or (ca_s, lo, hi, "")
+        raise InvalidParameterError(
+            ca_s_name, value, f"{vlo:.4g} to {vhi:.4g}",
+            f"the shear capillary number Ca_S = {ca_s:.4g} is outside the solvers' range "
+            f"{lo:g} <= Ca_S <= {hi:g} (--solver {'/'.join(solvers)})" + reason)
+    nu_lo, nu_hi = reference_nu_range("biconcave")
+    if not nu_lo <= nu <= nu_hi:
+        raise InvalidParameterError(
+            nu_name, nu, f"a reduced volume {nu_lo:g} <= nu <= {nu_hi:g} for a red-cell solve",
+            f"nu = {nu:.4g}: the red cell's stress-free Evans-Fung disc exists for "
+            f"{nu_lo:g} <= nu <= {nu_hi:g}; give --membrane vesicle")
+
+
+def _red_cell_quantities(ca_s: float, beta: float, given_ca_s: bool = False) -> dict:
+    """The rows Ca_S and beta of a red cell (units and sources, like Ca_B's)."""
+    if given_ca_s:
+        return {"ca_s": Quantity(ca_s, UNITS["ca_s"], "input", True),
+                "shear_ratio": Quantity(beta, UNITS["shear_ratio"], "Ca_B/Ca_S (from the inputs)",
+                                        True, "Evans 1973 (area-incompressible shear law)")}
+    return {"ca_s": Quantity(ca_s, UNITS["ca_s"], "eta U/G_s (from the inputs)", True,
+                             "Evans 1973; G_s default 6 uN/m, Hochmuth & Waugh 1987"),
+            "shear_ratio": Quantity(beta, UNITS["shear_ratio"],
+                                    "G_s R0^2/kappa (from the inputs)", True,
+                                    "Evans 1973; = Ca_B/Ca_S")}
+
+
+def _red_cell_notes(quantities: dict, state: dict, log: dict) -> list:
+    """The notes of a red cell: what answered, and where nothing did, why and what would."""
     notes = []
+    beta, ca_s = state["shear_ratio"], state["ca_s"]
     mapped = [k for k in QUANTITIES if (quantities[k].method or "").startswith("map (")]
     if mapped:
+        notes.append(f"{', '.join(mapped)} from the red-cell map (shear ratio beta = "
+                     f"{beta:.4g}) at Ca_B = {state['ca_b']:.4g}, Ca_S = {ca_s:.4g}, "
+                     "interpolated between stored steady solutions; ± is its error bar "
+                     "(interpolation + solver + model error, the parts it knows).")
+    missing = [k for k in QUANTITIES if quantities[k].value is None
+               and quantities[k].note.startswith("no valid")]
+    reasons = sorted(set(log.get("map_refused", {}).values()))
+    if missing:
+        why = f" ({'; '.join(reasons)})" if reasons else ""
+        notes.append(f"No red-cell value for {', '.join(missing)} here{why}. The closed-form "
+                     "laws are vesicle results and are not used for a red cell; --solver bem "
+                     "solves this red cell (Ca_S = eta U/G_s), --membrane vesicle gives the "
+                     "vesicle, the red cell's high-velocity limit.")
+    return notes
+
+
+def _notes(quantities: dict, ca_b, log: dict, state: dict | None = None) -> tuple:
+    notes = []
+    red_cell = state is not None and state.get("membrane") == "red-cell"
+    if red_cell:
+        notes += _red_cell_notes(quantities, state, log)
+    mapped = [k for k in QUANTITIES if (quantities[k].method or "").startswith("map (")]
+    if mapped and not red_cell:
         used = f"{ca_b:.4g}" if ca_b is not None else f"{MAP_DEFAULT_CA_B:g} (assumed: not given)"
         notes.append(f"{', '.join(mapped)} from the solution map at Ca_B = {used}, "
                      "interpolated between stored steady solutions; ± is its error bar "
@@ -470,13 +590,13 @@ def _notes(quantities: dict, ca_b, log: dict) -> tuple:
                      + ", ".join(f"{a}: {SOLVER_COST[a]}" for a in available) + ").")
     missing = [k for k in QUANTITIES if quantities[k].value is None
                and quantities[k].note.startswith("no valid")]
-    if missing:
+    if missing and not red_cell:
         covering = sorted(set().union(*(covers.get(k, ()) for k in missing)))
         hint = ("; " + " or ".join(f"--solver {a}" for a in covering) + " would compute "
                 "them (not run unless enabled)" if covering else "")
         notes.append(f"No closed-form method is valid for {', '.join(missing)} here{hint}; use "
                      "extrapolate=True (--extrapolate) for flagged extrapolations.")
-    if ca_b is not None and ca_b < 10:
+    if ca_b is not None and ca_b < 10 and not red_cell:
         notes.append(f"Ca_B = {ca_b:.3g} < 10: bending matters; Chen et al. 2020 correlations were "
                      "established for 10 <= Ca_B <= 1e4 (Ca_B = 50 for most).")
     return tuple(notes)
@@ -484,15 +604,19 @@ def _notes(quantities: dict, ca_b, log: dict) -> tuple:
 
 def physical_scales(R0_um: float, diameter_um: float, velocity_mm_s: float | None = None,
                     plasma_viscosity_mpas: float | None = None,
-                    bending_modulus_j: float | None = None) -> dict:
-    r"""The physical value of one unit of each dimensionless quantity, and Ca_B.
+                    bending_modulus_j: float | None = None,
+                    shear_modulus_un_m: float | None = None) -> dict:
+    r"""The physical value of one unit of each dimensionless quantity, and Ca_B, Ca_S and β.
 
-    With R0 the volume radius, R = d/2 the tube radius, U the mean velocity, η the viscosity and
-    κ the bending modulus (the scalings of the module docstring): ``V_mm_s`` = U [mm/s] (V/U
-    → V), ``dp_plus_Pa`` = ηU/R0 [Pa] (Δp⁺R0/(ηU) → Δp⁺), ``film_nm`` = R [nm] (h/R → h),
-    ``length_um`` = R [µm] (L/R → L), ``tension_mN_m`` = ηU [mN/m] (γ/(ηU) → γ) and ``ca_b``
-    = ηUR0²/κ (Chen et al. 2020 §II). A key whose inputs are not given is left out. Inputs are
-    taken as checked (positive and finite).
+    With R0 the volume radius, R = d/2 the tube radius, U the mean velocity, η the viscosity,
+    κ the bending modulus and G_s the membrane shear modulus (the scalings of the module
+    docstring): ``V_mm_s`` = U [mm/s] (V/U → V), ``dp_plus_Pa`` = ηU/R0 [Pa] (Δp⁺R0/(ηU) →
+    Δp⁺), ``film_nm`` = R [nm] (h/R → h), ``length_um`` = R [µm] (L/R → L), ``tension_mN_m`` =
+    ηU [mN/m] (γ/(ηU) → γ), ``ca_b`` = ηUR0²/κ (Chen et al. 2020 §II), ``ca_s`` = ηU/G_s (the
+    shear capillary number of a red-cell membrane, Evans 1973's area-incompressible law; user
+    guide §8) and ``shear_ratio`` β = G_s R0²/κ = Ca_B/Ca_S (the cell's ratio of shear to
+    bending stiffness, independent of the flow). A key whose inputs are not given is left out.
+    Inputs are taken as checked (positive and finite).
 
     Parameters
     ----------
@@ -500,12 +624,17 @@ def physical_scales(R0_um: float, diameter_um: float, velocity_mm_s: float | Non
         Volume radius and tube diameter [µm].
     velocity_mm_s, plasma_viscosity_mpas, bending_modulus_j : float, optional
         U [mm/s], η [mPa·s], κ [J].
+    shear_modulus_un_m : float, optional
+        G_s [µN/m] (6 for a human red cell, Hochmuth & Waugh 1987).
 
     Examples
     --------
     >>> s = physical_scales(2.78, 4.0, 1.0, 1.2, 2e-19)
     >>> s["film_nm"], round(s["dp_plus_Pa"], 4), round(s["ca_b"], 2)
     (2000.0, 0.4317, 46.37)
+    >>> s = physical_scales(2.78, 4.0, 1.0, 1.2, 2e-19, 6.0)
+    >>> round(s["ca_s"], 4), round(s["shear_ratio"], 1), round(s["ca_b"] / s["ca_s"], 1)
+    (0.2, 231.9, 231.9)
     """
     R0_m, R_m = R0_um * 1e-6, diameter_um / 2 * 1e-6
     out = {"film_nm": R_m * 1e9, "length_um": R_m * 1e6}
@@ -516,6 +645,10 @@ def physical_scales(R0_um: float, diameter_um: float, velocity_mm_s: float | Non
             out.update(dp_plus_Pa=eta_U / R0_m, tension_mN_m=eta_U * 1e3)
             if bending_modulus_j is not None:
                 out["ca_b"] = eta_U * R0_m**2 / bending_modulus_j
+            if shear_modulus_un_m is not None:
+                out["ca_s"] = eta_U / (shear_modulus_un_m * 1e-6)
+    if bending_modulus_j is not None and shear_modulus_un_m is not None:
+        out["shear_ratio"] = shear_modulus_un_m * 1e-6 * R0_m**2 / bending_modulus_j
     return out
 
 
@@ -524,10 +657,36 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
              diameter_um: float = RBC_DEFAULTS["diameter_um"],
              velocity_mm_s: float = RBC_DEFAULTS["velocity_mm_s"],
              plasma_viscosity_mpas: float = RBC_DEFAULTS["plasma_viscosity_mpas"],
-             bending_modulus_j: float = RBC_DEFAULTS["bending_modulus_j"], *,
+             bending_modulus_j: float = RBC_DEFAULTS["bending_modulus_j"],
+             shear_modulus_un_m: float = RBC_DEFAULTS["shear_modulus_un_m"], *,
+             membrane: str = "red-cell",
              hematocrit: float | None = None, hematocrit_kind: str = "tube",
              extrapolate: bool = False, solvers: tuple = (), solution_map=None) -> Estimate:
     r"""Engineering estimate from physical inputs (defaults: human RBC in a 4 µm capillary).
+
+    **A red cell** (``membrane="red-cell"``, the default): a membrane with bending, local
+    inextensibility and in-plane shear elasticity (Evans 1973's area-incompressible law, modulus
+    G_s; user guide §8). The estimate reports Ca_S = ηU/G_s and β = G_s R0²/κ = Ca_B/Ca_S
+    (:func:`physical_scales`). V/U, Δp⁺, film, length, tensions and shape class come from an
+    enabled solver (``solvers=("bem",)`` solves this red cell, Ca_S from the inputs), else from
+    the red-cell map (:data:`correlations.solution_map.RED_CELL_MAP` for ``solution_map=None``)
+    when the cell's β equals the map's within
+    :data:`~correlations.registry.SHEAR_RATIO_RTOL` = 1e-3 and the case lies in the map's box:
+    a line of that map is one cell (one β) at different velocities, and 1e-3 in β moves Δp⁺ by
+    at most 5e-4 relative, well inside the map's error bars (derivation in
+    :mod:`correlations.registry`, "A red cell"). Otherwise they are unavailable, with the
+    reason (another modulus, bending modulus or volume: ``--solver bem``). The closed-form
+    vesicle laws (near-critical asymptotes, small sphere, Chen et al.'s film, length, tension
+    and transition laws) are *not* used for a red cell: they are derived or fitted for a
+    membrane without shear elasticity, whose effect on Δp⁺ our BEM measures at a factor 1.3-2.9
+    for the default cell at 0.1-1 mm/s in a 4 µm tube (docs/red-cell.md); they are the red
+    cell's high-velocity limit, which ``membrane="vesicle"`` gives, labelled as such. The
+    geometry, hematocrit conversions and apparent viscosity hold for both (the single-file
+    viscosity with the red cell's Δp⁺).
+
+    **A vesicle** (``membrane="vesicle"``): bending and local inextensibility only (lipid
+    vesicles; for a red cell the high-velocity limit Ca_S → ∞). ``shear_modulus_un_m`` is
+    checked but unused, and the result is exactly the estimate before red cells were added.
 
     Parameters
     ----------
@@ -543,40 +702,54 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
         Suspending-fluid viscosity eta [mPa·s].
     bending_modulus_j : float
         Membrane bending modulus kappa [J].
+    shear_modulus_un_m : float
+        Membrane shear modulus G_s of a red cell [µN/m] (default 6, Hochmuth & Waugh 1987;
+        measured values 4-10).
+    membrane : {"red-cell", "vesicle"}
+        The cell's membrane (above).
     hematocrit : float, optional
         Volume fraction in [0, 1) (not %); enables the apparent viscosity eta_rel.
     hematocrit_kind : {"tube", "discharge"}
         Whether ``hematocrit`` is the tube (H_T) or discharge (H_D) hematocrit.
     extrapolate, solvers, solution_map :
         See :func:`estimate_dimensionless`; the map and the solvers take Ca_B = eta U R0^2/kappa
-        from the inputs.
+        (and for a red cell Ca_S = eta U/G_s) from the inputs. ``solution_map=None`` is the
+        shipped map of the membrane; a given map must be of the cell's membrane.
 
     Returns
     -------
     Estimate
         Dimensionless quantities as in :func:`estimate_dimensionless` plus ``R0_um``, ``d_c_um``,
         ``L_c_um``, ``ca_b``, ``V_mm_s``, ``dp_plus_Pa``, ``film_nm``, ``length_um``,
-        ``tension_front_mN_m`` and ``tension_max_mN_m``, each with its method, validity and
-        error bar.
+        ``tension_front_mN_m`` and ``tension_max_mN_m`` (a red cell also ``ca_s`` and
+        ``shear_ratio``), each with its method, validity and error bar.
 
     Raises
     ------
     CannotPassError
         If the tube is narrower than the critical diameter d_c.
+    InvalidParameterError
+        For a bad input, before any work; with a solver enabled for a red cell, a velocity
+        whose Ca_S is outside the solvers' range 0.01-1e4 (named ``velocity_mm_s``).
 
     Examples
     --------
-    >>> e = estimate()                       # RBC, 4 µm capillary, 1 mm/s
+    >>> e = estimate()                       # red cell, 4 µm capillary, 1 mm/s
     >>> round(e["nu"], 3), round(e["lam"], 3), round(e["d_c_um"], 2), e["passes"]
     (0.61, 1.39, 2.85, True)
-    >>> e.regime.split(" (")[0]              # no closed form here: the solution map answers
+    >>> round(e["ca_s"], 3), round(e["shear_ratio"], 1)
+    (0.2, 231.9)
+    >>> v = estimate(membrane="vesicle")     # no shear elasticity: the vesicle map answers
+    >>> v.regime.split(" (")[0]
     'intermediate confinement'
-    >>> estimate(solution_map=False)["V_over_U"] is None     # closed forms only
+    >>> estimate(membrane="vesicle", solution_map=False)["V_over_U"] is None  # closed forms
     True
     """
     kind = check_choice("hematocrit_kind", hematocrit_kind, ("tube", "discharge"))
+    membrane = check_choice("membrane", membrane, MEMBRANES)
     given = {"volume_fl": volume_fl, "diameter_um": diameter_um, "velocity_mm_s": velocity_mm_s,
-             "plasma_viscosity_mpas": plasma_viscosity_mpas, "bending_modulus_j": bending_modulus_j}
+             "plasma_viscosity_mpas": plasma_viscosity_mpas, "bending_modulus_j": bending_modulus_j,
+             "shear_modulus_un_m": shear_modulus_un_m}
     for name, x in (*given.items(), ("area_um2", area_um2), ("hematocrit", hematocrit)):
         _scalar(name, x)
     for name, value in given.items():      # absurd values are refused before any work
@@ -592,22 +765,40 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
         raise CannotPassError("diameter_um", diameter_um, f"diameter_um > d_c = {d_c:.4g} um",
                               f"the cell (nu={nu:.3g}, R0={R0:.3g} um) cannot pass this tube intact")
     lam = 2.0 * R0 / diameter_um
-    scale = physical_scales(R0, diameter_um, velocity_mm_s, plasma_viscosity_mpas, kappa)
+    G_s = float(shear_modulus_un_m)                       # [µN/m]
+    red_cell = membrane == "red-cell"
+    scale = physical_scales(R0, diameter_um, velocity_mm_s, plasma_viscosity_mpas, kappa,
+                            G_s if red_cell else None)
     ca_b = scale["ca_b"]
     hematocrits = {}
     if hematocrit is not None:
         hematocrits[f"{kind}_hematocrit"] = float(check_fraction("hematocrit", hematocrit))
     solvers, log = _check_solvers(solvers), {}
+    cell = None
+    if red_cell:
+        ca_s, beta = scale["ca_s"], scale["shear_ratio"]
+        # the velocities of the solvers' Ca_S range for this cell: U = Ca_S G_s/eta [mm/s]
+        u_of = G_s * 1e-6 / eta * 1e3
+        _check_red_cell_solve(nu, ca_s, solvers, "velocity_mm_s", "area_um2", (
+            U * 1e3, 1e-2 * u_of, 1e4 * u_of,
+            f" for G_s = {G_s:g} uN/m and eta = {eta * 1e3:g} mPa s"))
+        cell = {"membrane": "red-cell", "ca_s": ca_s, "shear_ratio": beta,
+                "default_cell": _default_cell()}
     solution_map = _check_solution_map(solution_map)
+    _check_map_membrane(solution_map, cell)
     state, q = _core(nu, lam, ca_b, hematocrits, diameter_um, extrapolate, solvers, log,
-                     solution_map)
+                     solution_map, cell)
     inputs = {"volume_fl": float(volume_fl), "area_um2": float(area_um2), "diameter_um": diameter_um,
               "velocity_mm_s": U * 1e3, "plasma_viscosity_mpas": eta * 1e3, "bending_modulus_j": kappa,
               "hematocrit": hematocrit, "hematocrit_kind": kind}
+    if red_cell:        # a vesicle's inputs stay those of the estimate without red cells
+        inputs.update(shear_modulus_un_m=G_s, membrane=membrane)
     geo = "geometry (Chen 2020 §IV.A)"
     physical = {"R0_um": Quantity(R0, "um", geo, True), "d_c_um": Quantity(d_c, "um", geo, True),
                 "L_c_um": Quantity(critical_length_um(nu, R0), "um", geo, True),
                 "ca_b": Quantity(ca_b, "-", "eta U R0^2/kappa (from the inputs)", True)}
+    if red_cell:
+        physical.update(_red_cell_quantities(ca_s, beta))
     physical.update(V_mm_s=_scaled(q["V_over_U"], scale["V_mm_s"], "mm/s"),
                     dp_plus_Pa=_scaled(q["dp_plus_R0"], scale["dp_plus_Pa"], "Pa"),
                     film_nm=_scaled(q["film"], scale["film_nm"], "nm"),
@@ -615,7 +806,7 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
                     # gamma = (gamma/(eta V)) eta (V/U) U, in mN/m
                     **{f"{t}_mN_m": _scaled(q[t], scale["tension_mN_m"], "mN/m", q["V_over_U"])
                        for t in ("tension_front", "tension_max")})
-    notes = list(_notes(q, ca_b, log))
+    notes = list(_notes(q, ca_b, log, state))
     for name, key in (("Front", "tension_front_mN_m"), ("Maximum", "tension_max_mN_m")):
         tension = physical[key]
         if tension.value is not None:

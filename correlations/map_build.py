@@ -367,8 +367,8 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     message = res.message if res.success else "; ".join(failures)
     d = res.to_dict(shape=False)
     est = res.error_estimate if res.success else {}
-    fields = {"lam": d["lam"], "lam_c": d["lam_c"], "ca_s": d["ca_s"],
-              "reference": d["reference"], "success": bool(res.success),
+    fields = {"lam": d["lam"], "lam_c": d["lam_c"], "ca_s": d.get("ca_s"),
+              "reference": d.get("reference"), "success": bool(res.success),
               "status": status.value, "message": message, **{q: d.get(q) for q in QUANTITIES},
               "shape_class": d["shape_class"], "failed_starts": failures if res.success else [],
               "error_estimate": {q: (None if est.get(q) is None or not math.isfinite(est[q])

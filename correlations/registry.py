@@ -90,6 +90,39 @@ enabled the BEM rows come first (most accurate, slowest), then the lubrication r
 The BEM is never run unless the caller enables it, not even where no other method is valid:
 there the estimate only says that the BEM covers the case (a solve takes minutes). One solve per
 (nu, lam, Ca_B) serves all rows of a solver (:func:`_solver_rows`).
+
+A red cell
+----------
+The state of a red cell (``membrane`` = "red-cell", :data:`MEMBRANES`) also holds ``ca_s`` =
+eta U/G_s and ``shear_ratio`` beta = G_s R0^2/kappa = Ca_B/Ca_S (Evans's area-incompressible
+shear law, Evans 1973; G_s the membrane shear modulus). Then:
+
+* the solver rows solve the red cell (``ca_s`` passed to :func:`bem.vesicle.solve_vesicle` and
+  :func:`lubrication.solve.solve_lubrication`, stress-free shape their default, the Evans–Fung
+  disc). The lubrication range is the vesicle's: near lam_c the red cell's BEM and lubrication
+  agree as closely as the vesicle's (docs/red-cell.md: Delta p+ 2.6 % apart at lam/lam_c =
+  0.95, nu = 0.65, Ca_S = 0.2);
+* the map rows read the red-cell map (:data:`~correlations.solution_map.RED_CELL_MAP` unless
+  another is given) and answer only when the cell's beta equals the map's within
+  :data:`SHEAR_RATIO_RTOL` = 1e-3 (:func:`membrane_mismatch`); a vesicle map never answers for
+  a red cell, nor a red-cell map for a vesicle. The tolerance: at fixed Ca_B a relative change
+  of beta is the same relative change of Ca_S, and the red cell's answers change with Ca_S by
+  at most |d ln dp+/d ln Ca_S| ~ 0.5 and |d ln V/U / d ln Ca_S| ~ 0.1 (docs/red-cell.md, the
+  largest changes of its table: from 0.2 to 0.5 mm/s in the 6 um tube, Ca_B and Ca_S both
+  x2.5, dp+ falls by 34.5 % and V/U rises by 5.5 %, the vesicle's by less than 0.2 %); so
+  1e-3 in beta moves dp+ by at most 5e-4 and V/U by 1e-4 relative, well inside the map's
+  error bars. Another modulus, bending modulus or cell size needs its own slice or the BEM;
+* the closed-form laws of V/U, dp+, film, length, shape class and front tension are not used
+  (``membranes`` = vesicle only). The near-critical asymptotes (Barakat & Shaqfeh 2018a), the
+  film and tension laws and the transition line (Chen et al. 2020) are derived or fitted for a
+  membrane whose only in-plane stress is an isotropic tension; a red cell's shear stress
+  enters the normal-stress balance of the film (Secomb et al. 1986), and our BEM puts the
+  default red cell's dp+ at 1.3-2.9 times the vesicle's at 0.1-1 mm/s in a 4 um tube
+  (docs/red-cell.md). They are the red cell's high-velocity limit (Ca_S -> inf) only, which
+  the caller gets with membrane "vesicle". The small rigid sphere needs nu >= 0.9, which is no
+  red cell. The geometry (lam_c, passage), the hematocrit conversions and the apparent
+  viscosity laws (the single-file model with the red cell's own dp+; Pries et al.'s fits,
+  measured on blood) hold for both membranes.
 """
 
 from __future__ import annotations
@@ -106,12 +139,18 @@ from lubrication.checks import OUTPUT_BOUNDS, ValidityRange, check_output
 from . import film, pressure, shape, viscosity
 from . import solution_map as sm   # its attributes read at call time (tests patch query_map)
 
-__all__ = ["Answer", "BEM_RANGE", "MAP", "MAP_DEFAULT_CA_B", "Method", "MethodNotApplicable",
+__all__ = ["Answer", "BEM_RANGE", "MAP", "MAP_DEFAULT_CA_B", "MEMBRANES", "Method",
+           "MethodNotApplicable", "SHEAR_RATIO_RTOL",
            "METHODS", "OUTPUT_BOUNDS", "QUANTITIES", "SOLVERS", "SOLVER_COST",
            "SolverNotConverged", "check_output", "map_method_name"]
 
 #: Opt-in numerical solvers that rows of the table may name.
 SOLVERS = ("lubrication", "bem")
+#: The membranes of the estimate (module docstring, "A red cell"): a vesicle (bending, local
+#: inextensibility) and a red cell (also in-plane shear elasticity, Ca_S = eta U/G_s).
+MEMBRANES = ("vesicle", "red-cell")
+#: Largest |beta/beta_map - 1| at which a red-cell map answers for a cell (module docstring).
+SHEAR_RATIO_RTOL = 1e-3
 #: ``Method.solver`` of the map rows: used unless the caller disables the map.
 MAP = "map"
 
@@ -143,6 +182,10 @@ class Method:
         are used only when the caller enables that solver, and then ahead of the closed forms
         (in the order of :data:`METHODS`: BEM first). :data:`MAP` (``"map"``) for the rows of
         the solution map, used unless the caller disables the map, after enabled solvers.
+    membranes : tuple of str
+        The membranes (:data:`MEMBRANES`) the method holds for: both for the solvers, the map
+        and the hematocrit and viscosity laws; ``("vesicle",)`` for the closed-form vesicle
+        laws (module docstring, "A red cell").
     """
 
     quantity: str
@@ -152,6 +195,7 @@ class Method:
     evaluate: Callable[[dict], float | str]
     requires: tuple[str, ...] = ()
     solver: str | None = None
+    membranes: tuple[str, ...] = MEMBRANES
 
 
 class SolverNotConverged(RuntimeError):
@@ -233,10 +277,14 @@ def guarded(solve, *args, **kwargs):
 
 
 @functools.lru_cache(maxsize=16)
-def _lubrication_solution(nu: float, lam: float, ca_b: float):
+def _lubrication_solution(nu: float, lam: float, ca_b: float, ca_s: float | None = None):
+    """One :func:`lubrication.solve.solve_lubrication` per case; ``ca_s`` for a red cell (its
+    default stress-free shape, the Evans–Fung disc), absent for a vesicle."""
     from lubrication.solve import (  # lazy: scipy.integrate off the estimate's start-up
         solve_lubrication)
-    return guarded(solve_lubrication, nu, lam, ca_b=ca_b)
+    if ca_s is None:
+        return guarded(solve_lubrication, nu, lam, ca_b=ca_b)
+    return guarded(solve_lubrication, nu, lam, ca_b=ca_b, ca_s=ca_s)
 
 
 # BEM vesicle (bem.vesicle): the full Stokes problem, no lubrication approximation. Validated for
@@ -254,11 +302,14 @@ BEM_DEFAULT_CA_B = 50.0
 
 
 @functools.lru_cache(maxsize=16)
-def _bem_result(nu: float, lam: float, ca_b: float):
-    """One :func:`bem.vesicle.solve_vesicle` per (nu, lam, Ca_B) to BEM_TOLERANCES, converged
-    or not (minutes)."""
+def _bem_result(nu: float, lam: float, ca_b: float, ca_s: float | None = None):
+    """One :func:`bem.vesicle.solve_vesicle` per (nu, lam, Ca_B[, Ca_S]) to BEM_TOLERANCES,
+    converged or not (minutes); ``ca_s`` for a red cell (default stress-free shape, the
+    Evans–Fung disc), absent for a vesicle."""
     from bem import vesicle  # lazy: bem and scipy off the estimate's start-up
-    return guarded(vesicle.solve_vesicle, nu, lam, ca_b=ca_b, **BEM_TOLERANCES)
+    if ca_s is None:
+        return guarded(vesicle.solve_vesicle, nu, lam, ca_b=ca_b, **BEM_TOLERANCES)
+    return guarded(vesicle.solve_vesicle, nu, lam, ca_b=ca_b, ca_s=ca_s, **BEM_TOLERANCES)
 
 
 #: Table quantities a solver or the map gives, with the name of each in their results.
@@ -293,7 +344,9 @@ def _solver_rows(solver: str, name: str, reference: str, rng: ValidityRange, sol
 
     def row(quantity: str):
         def evaluate(s: dict):
-            return values(solve(s["nu"], s["lam"], s.get("ca_b", default_ca_b)))[quantity]
+            red_cell = (s["ca_s"],) if "ca_s" in s else ()     # a vesicle: no Ca_S
+            return values(solve(s["nu"], s["lam"], s.get("ca_b", default_ca_b),
+                                *red_cell))[quantity]
         return evaluate
     return tuple(
         Method(q, name, reference + (" (minimum gap)" if q == "film" else ""), rng, row(q),
@@ -319,14 +372,45 @@ _MAP_SOURCE = ("solution map (correlations.solution_map): stored BEM and lubrica
                "interpolated")
 
 
-def resolve_solution_map(choice):
-    """The map the rows read: ``choice`` None for the shipped map (the rows have no value when
-    none is shipped), or a path or :class:`~correlations.solution_map.SolutionMap`."""
+def resolve_solution_map(choice, membrane: str = "vesicle"):
+    """The map the rows read: ``choice`` None for the shipped map of ``membrane`` (the vesicle
+    map :data:`~correlations.solution_map.DEFAULT_MAP`, the red-cell slice
+    :data:`~correlations.solution_map.RED_CELL_MAP`; the rows have no value when none is
+    shipped), or a path or :class:`~correlations.solution_map.SolutionMap`."""
     if isinstance(choice, sm.SolutionMap):
         return choice
-    if choice is None and not sm.DEFAULT_MAP.exists():
-        raise MethodNotApplicable(f"no solution map shipped ({sm.DEFAULT_MAP} absent)")
-    return sm.load_map(choice)
+    if membrane == "vesicle":
+        if choice is None and not sm.DEFAULT_MAP.exists():
+            raise MethodNotApplicable(f"no solution map shipped ({sm.DEFAULT_MAP} absent)")
+        return sm.load_map(choice)
+    if choice is None and not sm.RED_CELL_MAP.exists():
+        raise MethodNotApplicable(f"no red-cell map shipped ({sm.RED_CELL_MAP.name} absent): "
+                                  "give --solver bem or --membrane vesicle")
+    return sm.load_map(sm.RED_CELL_MAP if choice is None else choice)
+
+
+def membrane_mismatch(m, state: dict) -> str:
+    """Why map ``m`` cannot answer for the cell of ``state`` ('' if it can): a vesicle map for
+    a red cell or a red-cell map for a vesicle, or a red-cell map of another shear ratio
+    beta = G_s R0^2/kappa than the cell's (tolerance :data:`SHEAR_RATIO_RTOL`, module
+    docstring)."""
+    red_cell = state.get("membrane", "vesicle") == "red-cell"
+    if m.membrane is None:
+        return ("the map is a vesicle map (no shear elasticity): it gives no red-cell value"
+                if red_cell else "")
+    beta_map = m.membrane["shear_ratio"]
+    if not red_cell:
+        return (f"the map is a red-cell map (beta = {beta_map:.4g}): it gives no vesicle value")
+    beta = state["shear_ratio"]
+    if abs(beta / beta_map - 1.0) > SHEAR_RATIO_RTOL:
+        cell = state.get("default_cell")    # (beta, "G_s ..., kappa ..., volume") of the default
+        known = cell is not None and abs(cell[0] / beta_map - 1.0) <= SHEAR_RATIO_RTOL
+        return (f"the red-cell map holds beta = G_s R0^2/kappa = {beta_map:.4g}"
+                + (f" ({cell[1]})" if known else "")
+                + f"; this cell has beta = {beta:.4g} (|beta/beta_map - 1| = "
+                f"{abs(beta / beta_map - 1.0):.2g} > {SHEAR_RATIO_RTOL:g}): give --solver bem "
+                "or --membrane vesicle")
+    return ""
 
 
 @functools.lru_cache(maxsize=32)
@@ -348,7 +432,10 @@ def map_method_name(methods) -> str:
 def _map_row(quantity: str, key: str):
     """``evaluate`` of the map row of ``quantity`` (``key`` its name in the map)."""
     def evaluate(s: dict) -> Answer:
-        m = resolve_solution_map(s.get("solution_map"))
+        m = resolve_solution_map(s.get("solution_map"), s.get("membrane", "vesicle"))
+        mismatch = membrane_mismatch(m, s)
+        if mismatch:
+            raise MethodNotApplicable(mismatch)
         ca_b = s.get("ca_b", MAP_DEFAULT_CA_B)
         res = map_query(s["nu"], s["lam"] / s["lam_c"], ca_b, m)
         v = res.quantities[key]
@@ -393,36 +480,40 @@ def _eta_pries1992(s: dict) -> float:
     return viscosity.viscosity_vitro_pries1992(s["diameter_um"], s["discharge_hematocrit"])
 
 
+#: The closed-form laws of V/U, dp+, film, length, shape class and front tension are vesicle
+#: results (module docstring, "A red cell"): they answer for a vesicle only.
+_VESICLE = ("vesicle",)
+
 METHODS: tuple[Method, ...] = (
     *_BEM_ROWS,
     *_LUBRICATION_ROWS,
     *_MAP_ROWS,
     Method("V_over_U", "small_sphere_faxen", "Chen et al. 2020 eq. small1 (Faxen)",
-           SMALL_VESICLE_RANGE, lambda s: asymptotics.speed_small_sphere(s["lam"])),
+           SMALL_VESICLE_RANGE, lambda s: asymptotics.speed_small_sphere(s["lam"]), membranes=_VESICLE),
     Method("V_over_U", "near_critical_barakat2018a",
            "Barakat & Shaqfeh 2018a as Chen et al. 2020 eq. asmyp1",
            asymptotics.NEAR_CRITICAL_RANGE,
-           lambda s: asymptotics.speed_near_critical(s["nu"], s["lam"])),
+           lambda s: asymptotics.speed_near_critical(s["nu"], s["lam"]), membranes=_VESICLE),
     Method("dp_plus_R0", "small_sphere_faxen", "Chen et al. 2020 eq. small2",
-           SMALL_VESICLE_RANGE, lambda s: asymptotics.dp_plus_small_sphere(s["lam"])),
+           SMALL_VESICLE_RANGE, lambda s: asymptotics.dp_plus_small_sphere(s["lam"]), membranes=_VESICLE),
     Method("dp_plus_R0", "film_scaling_chen2020", "Chen et al. 2020 fig. dpa_film: (3/2) lam ell/delta",
            pressure.DP_PLUS_FILM_RANGE_CHEN2020,
            lambda s: pressure.dp_plus_film_chen2020(s["lam"], s["ell"], s["film"]),
-           requires=("ell", "film")),
+           requires=("ell", "film"), membranes=_VESICLE),
     Method("dp_plus_R0", "near_critical_barakat2018a",
            "Barakat & Shaqfeh 2018a as Chen et al. 2020 eq. asmyp2",
            asymptotics.NEAR_CRITICAL_RANGE,
-           lambda s: asymptotics.dp_plus_near_critical(s["nu"], s["lam"])),
+           lambda s: asymptotics.dp_plus_near_critical(s["nu"], s["lam"]), membranes=_VESICLE),
     Method("film", "geometric_chen2020", "Chen et al. 2020 eq. sfilm2: h/R = 1 - lam/lam_c",
-           film.FILM_RANGE_CHEN2020, lambda s: film.film_thickness_chen2020(s["nu"], s["lam"])),
+           film.FILM_RANGE_CHEN2020, lambda s: film.film_thickness_chen2020(s["nu"], s["lam"]), membranes=_VESICLE),
     Method("ell", "length_chen2020", "Chen et al. 2020 eq. sL: ell = ell_c lam/lam_c",
-           shape.LENGTH_RANGE_CHEN2020, lambda s: shape.length_chen2020(s["nu"], s["lam"])),
+           shape.LENGTH_RANGE_CHEN2020, lambda s: shape.length_chen2020(s["nu"], s["lam"]), membranes=_VESICLE),
     Method("shape_class", "transition_chen2020", "Chen et al. 2020 eq. transition",
-           shape.SHAPE_CLASS_RANGE_CHEN2020, lambda s: shape.shape_class_chen2020(s["nu"], s["lam"])),
+           shape.SHAPE_CLASS_RANGE_CHEN2020, lambda s: shape.shape_class_chen2020(s["nu"], s["lam"]), membranes=_VESICLE),
     Method("tension_front", "film_inverse_chen2020",
            "Chen et al. 2020 eqs. sfilm4, tension2: gamma_F/(eta V) = (delta/c0)^(-3/2), c0 = 2",
            _TENSION_RANGE,
-           lambda s: 1.0 / film.capillary_from_film_chen2020(s["film"]), requires=("film",)),
+           lambda s: 1.0 / film.capillary_from_film_chen2020(s["film"]), requires=("film",), membranes=_VESICLE),
     # Cell-flux conservation in single file: H_D U = H_T V, i.e. H_D/H_T = V/U (physics-notes §6).
     Method("tube_hematocrit", "single_file_flux", "cell flux conservation: H_T = H_D/(V/U)",
            SINGLE_FILE_RANGE, lambda s: s["discharge_hematocrit"] / s["V_over_U"],

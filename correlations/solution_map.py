@@ -123,6 +123,22 @@ at least 50: Chen et al. (2020) §IV.A (fig. shapes1) find the steady shape "vir
 of Ca_B" for Ca_B ≥ 50 and their phase diagram spans 10 < Ca_B < 1e4. The clamp is not trusted
 blindly: its model error is the measured change of the (scaled) quantity between the two
 largest Ca_B of the map (e.g. 50 and 500), added to the error bar. Beyond 1e4 the query is refused.
+
+Membrane: a vesicle map or a red-cell map
+-----------------------------------------
+A map knows the membrane of its points (:attr:`SolutionMap.membrane`, from the packed
+``parameters``): None for a vesicle (bending, local inextensibility, no shear elasticity),
+``{"shear_ratio": β, "reference": name}`` for a red cell built with the BEM option
+``shear_ratio`` β = G_s R0²/κ = Ca_B/Ca_S (:data:`correlations.map_build.SHEAR_RATIO`; Evans's
+area-incompressible shear law, Evans 1973, about a stress-free shape ``reference``). A line in
+Ca_B of a red-cell map is one cell (one β) at different velocities, so the Ca_S of a query is
+Ca_B/β. Its answers hold for that β only: the caller compares the cell's β with the map's
+(:func:`correlations.estimate.estimate`). Every query result carries the membrane
+(:attr:`MapQuery.membrane`), so that a red-cell answer is never read as a vesicle's. The Ca_B
+clamp above is a vesicle result (Chen et al. 2020 §IV.A) and does not apply to a red-cell map:
+along a red-cell line Ca_S grows with Ca_B and the solution keeps changing (docs/red-cell.md:
+Δp⁺ changes by 4–19 % per doubling of U at 4–8 mm/s), so above its largest Ca_B a red-cell map
+refuses, as below its smallest.
 """
 
 from __future__ import annotations
@@ -148,7 +164,7 @@ from lubrication.results import Status, status_of
 from .files import check_input_file, expect, read_json
 
 __all__ = ["FORMAT", "POINT_FORMAT", "POINT_GLOB", "QUANTITIES", "TRANSFORMS", "DEFAULT_MAP",
-           "CA_B_CLAMP_MAX", "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
+           "RED_CELL_MAP", "SHEAR_RATIO", "CA_B_CLAMP_MAX", "membrane_of", "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
            "read_points", "read_build", "pack_map", "load_map", "query_map", "query_map_many"]
 
 #: identifiers of the packed file and of a stored point (checked on load)
@@ -157,6 +173,17 @@ POINT_FORMAT = "vesicle-tube map point"
 
 #: where the shipped map lives (package data); absent until a build has been packed there
 DEFAULT_MAP = Path(__file__).with_name("data") / "solution_map.json"
+
+#: where the shipped red-cell slice lives (package data; a map whose membrane is a red cell's,
+#: :attr:`SolutionMap.membrane`); absent until its build has been packed there
+RED_CELL_MAP = Path(__file__).with_name("data") / "rbc_slice_map.json"
+
+#: the build option of a red-cell map (:data:`correlations.map_build.SHEAR_RATIO`): the cell's
+#: β = G_s R0²/κ = Ca_B/Ca_S, stored in the packed ``parameters.options.bem``
+SHEAR_RATIO = "shear_ratio"
+#: stress-free shape of a red-cell map built without a ``reference`` option: the default of
+#: :func:`bem.vesicle.solve_vesicle` (the Evans–Fung disc, :mod:`lubrication.membrane`)
+DEFAULT_REFERENCE = "biconcave"
 
 #: largest Ca_B answered by clamping to the map's largest Ca_B (see the module docstring)
 CA_B_CLAMP_MAX = 1e4
@@ -674,6 +701,10 @@ class SolutionMap:
         self.source = source
         self.grid = data["grid"]
         self.provenance = data.get("provenance", {})
+        self.parameters = data.get("parameters", {})
+        #: None for a vesicle map, ``{"shear_ratio": β, "reference": name}`` for a red-cell map
+        #: (:func:`membrane_of`; module docstring)
+        self.membrane = membrane_of(self.parameters)
         self.holes = data.get("holes", [])
         self.columns = data["columns"]
         self.n = len(self.columns["nu"])
@@ -1293,24 +1324,47 @@ class MapValue:
 
 @dataclass(frozen=True)
 class MapQuery:
-    """Result of :func:`query_map`: the inputs, the map file and one :class:`MapValue` per
-    quantity (``quantities``, keyed like :data:`QUANTITIES` plus ``shape_class``)."""
+    """Result of :func:`query_map`: the inputs, the map file, one :class:`MapValue` per
+    quantity (``quantities``, keyed like :data:`QUANTITIES` plus ``shape_class``) and the map's
+    membrane (:attr:`SolutionMap.membrane`: None for a vesicle map, β and the reference shape
+    for a red-cell map)."""
     nu: float
     lam_ratio: float
     ca_b: float
     source: str
     quantities: dict
+    membrane: dict | None = None
 
     def __getitem__(self, key):
         return self.quantities[key].value
 
     def to_dict(self) -> dict:
         return {"nu": self.nu, "lam_ratio": self.lam_ratio, "ca_b": self.ca_b,
-                "map": self.source,
+                "map": self.source, "membrane": self.membrane,
                 "quantities": {k: v.to_dict() for k, v in self.quantities.items()}}
 
 
 # --------------------------------------------------------------------------- load
+
+def membrane_of(parameters: dict) -> dict | None:
+    """The membrane of a map from its packed ``parameters`` (module docstring, Membrane): None
+    for a vesicle map, ``{"shear_ratio": β, "reference": name}`` for a red-cell map (a BEM
+    option :data:`SHEAR_RATIO`; ``reference`` the BEM option, else :data:`DEFAULT_REFERENCE`).
+
+    Examples
+    --------
+    >>> membrane_of({"options": {"bem": {"shear_ratio": 231.859}}})
+    {'shear_ratio': 231.859, 'reference': 'biconcave'}
+    >>> membrane_of({}) is None
+    True
+    """
+    options = parameters.get("options") if isinstance(parameters, dict) else None
+    bem = options.get("bem") if isinstance(options, dict) else None
+    if not isinstance(bem, dict) or SHEAR_RATIO not in bem:
+        return None
+    return {"shear_ratio": float(bem[SHEAR_RATIO]),
+            "reference": str(bem.get("reference", DEFAULT_REFERENCE))}
+
 
 def _check_packed(data, check) -> None:
     """Schema of a packed map: the header, the grid, every column the queries read (one value
@@ -1328,6 +1382,17 @@ def _check_packed(data, check) -> None:
           "variables than this version uses: pack it again with 'vesicle-tube map pack'")
     _check_grid(data.get("grid"), check)
     check(isinstance(data.get("provenance", {}), dict), "'provenance' is not an object")
+    parameters = data.get("parameters", {})
+    check(isinstance(parameters, dict), "'parameters' is not an object")
+    bem = (parameters.get("options") or {}).get("bem") if isinstance(
+        parameters.get("options"), dict) else None
+    if isinstance(bem, dict) and SHEAR_RATIO in bem:
+        beta, reference = bem[SHEAR_RATIO], bem.get("reference", DEFAULT_REFERENCE)
+        check(_number(beta) and 0.0 < beta < math.inf,
+              f"parameters.options.bem.{SHEAR_RATIO} {_show(beta)} is not a positive finite "
+              "number (the red-cell ratio G_s R0^2/kappa)")
+        check(isinstance(reference, str), f"parameters.options.bem.reference {_show(reference)} "
+                                          "is not the name of a stress-free shape")
     cols = data.get("columns")
     check(isinstance(cols, dict), "no 'columns' object")
     needed = ["method", "nu", "lam_ratio", "ca_b", "shape_class", *QUANTITIES]
@@ -1475,7 +1540,7 @@ def query_map_many(nu, lam_ratio, ca_b, map=None, names=tuple(QUANTITIES)) -> li
                 if shape is None:
                     shape = m._shapes[rows] = m.shape_class(rows)
                 values["shape_class"] = shape
-        out.append(MapQuery(*p, m.source, values))
+        out.append(MapQuery(*p, m.source, values, m.membrane))
     return out
 
 
@@ -1489,7 +1554,9 @@ def outside_reason(m: SolutionMap, nu: float, lam_ratio: float, ca_b: float) -> 
     if not lo * (1 - eps) <= lam_ratio <= hi * (1 + eps):
         return (f"lam_ratio={lam_ratio:.6g} outside the map's range {lo:g} <= lam/lam_c <= "
                 f"{hi:g}")
-    top = CA_B_CLAMP_MAX if m.cas[-1] >= 50.0 else m.cas[-1]
+    # the clamp is a vesicle result: a red-cell map refuses above its largest Ca_B (module
+    # docstring, Membrane)
+    top = CA_B_CLAMP_MAX if m.cas[-1] >= 50.0 and m.membrane is None else m.cas[-1]
     if not m.cas[0] * (1 - eps) <= ca_b <= top * (1 + eps):
         return (f"ca_b={ca_b:.6g} outside the map's range {m.cas[0]:g} <= Ca_B <= {top:g}"
                 + (" (values above the largest map Ca_B are clamped)" if top > m.cas[-1] else ""))

@@ -520,7 +520,7 @@ def test_viscosity_in_a_2um_tube_reports_no_tube_hematocrit(cli):
 def test_estimate_just_above_d_c_keeps_HT_below_HD(cli):
     """2.9 µm: below the Fåhræus fit's x = 1, the single-file flux H_T = H_D/(V/U) answers."""
     code, out, _ = cli("estimate", "--diameter-um", "2.9", "--hematocrit", "0.45",
-                       "--hematocrit-kind", "discharge", "--json")
+                       "--hematocrit-kind", "discharge", "--membrane", "vesicle", "--json")
     obj = strict_json(out)
     assert code == 0 and obj["tube_hematocrit"] == pytest.approx(0.45 / obj["V_over_U"], rel=1e-12)
     assert obj["tube_hematocrit"] < 0.45 and obj["methods"]["tube_hematocrit"]["method"] == "single_file_flux"

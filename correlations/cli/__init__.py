@@ -37,7 +37,7 @@ from correlations.cli.lubrication import add_parser as add_lubrication_parser
 from correlations.cli.map import add_map_parser
 from correlations.estimate import PHYSICAL_BOUNDS, RBC_DEFAULTS, estimate, estimate_dimensionless
 from correlations.plotting import plot_estimate, plot_relative_viscosity
-from correlations.registry import QUANTITIES, SOLVERS
+from correlations.registry import MEMBRANES, QUANTITIES, SOLVERS
 
 # Human labels of the output keys (key -> label); keys not listed are printed as they are. A
 # label names the quantity; the "unit" column says what its value is measured in (below).
@@ -46,6 +46,8 @@ LABELS = {
     "ell_c": "critical length L_c", "delta": "clearance delta = 1 - lam/lam_c",
     "passes": "passes the tube intact", "R0_um": "volume radius R0", "d_c_um": "critical diameter d_c",
     "L_c_um": "critical length L_c", "ca_b": "bending capillary number Ca_B = eta U R0^2/kappa",
+    "ca_s": "shear capillary number Ca_S = eta U/G_s",
+    "shear_ratio": "shear ratio beta = G_s R0^2/kappa = Ca_B/Ca_S",
     "V_over_U": "speed V/U", "V_mm_s": "cell speed V", "film": "film thickness h",
     "film_nm": "film thickness h", "ell": "length L", "length_um": "length L",
     "dp_plus_R0": "extra pressure drop dp+", "dp_plus_R": "extra pressure drop dp+",
@@ -69,7 +71,7 @@ UNIT_CONVENTION = ('unit column: a physical unit, or the scale of a dimensionles
 
 # Order of rows in the human estimate table.
 ESTIMATE_ROWS = ("nu", "lam", "lam_c", "delta", "ell_c", "passes", "R0_um", "d_c_um", "L_c_um",
-                 "ca_b", "shape_class", "V_over_U", "V_mm_s", "dp_plus_R0", "dp_plus_R",
+                 "ca_b", "ca_s", "shear_ratio", "shape_class", "V_over_U", "V_mm_s", "dp_plus_R0", "dp_plus_R",
                  "dp_plus_Pa", "film", "film_nm", "ell", "length_um", "tension_front",
                  "tension_front_etaU", "tension_front_mN_m", "tension_max", "tension_max_etaU",
                  "tension_max_mN_m", "tube_hematocrit", "discharge_hematocrit", "eta_rel")
@@ -80,6 +82,7 @@ OPTIONS = {
     "area_um2": "--area-um2", "diameter_um": "--diameter-um", "velocity_mm_s": "--velocity-mm-s",
     "plasma_viscosity_mpas": "--plasma-viscosity-mpas", "bending_modulus_j": "--bending-modulus-j",
     "hematocrit": "--hematocrit", "hematocrit_kind": "--hematocrit-kind", "solvers": "--solver",
+    "shear_modulus_un_m": "--shear-modulus-uN-m", "membrane": "--membrane", "ca_s": "--ca-s",
     "law": "--law", "constants": "--constants",
 }
 
@@ -159,32 +162,47 @@ def cmd_geometry(args) -> dict:
 def cmd_estimate(args) -> dict:
     physical = any(getattr(args, k) is not None for k in
                    ("volume_fl", "area_um2", "diameter_um", "velocity_mm_s",
-                    "plasma_viscosity_mpas", "bending_modulus_j"))
+                    "plasma_viscosity_mpas", "bending_modulus_j", "shear_modulus_uN_m",
+                    "membrane"))
     if args.nu is not None or args.lam is not None:
         if physical:
-            raise UsageError("give either --nu/--lam or physical inputs (--volume-fl ...), not both")
+            raise UsageError("give either --nu/--lam or physical inputs (--volume-fl ..., "
+                             "--shear-modulus-uN-m, --membrane), not both; the dimensionless "
+                             "estimate is a red cell when --ca-s is given")
         if args.nu is None or args.lam is None:
             raise UsageError("give both --nu and --lam for the dimensionless estimate")
         h = {f"{args.hematocrit_kind}_hematocrit": args.hematocrit} if args.hematocrit is not None else {}
         with _options(args, tube_hematocrit="--hematocrit", discharge_hematocrit="--hematocrit"):
-            est = estimate_dimensionless(args.nu, args.lam, args.ca_b, extrapolate=args.extrapolate,
+            est = estimate_dimensionless(args.nu, args.lam, args.ca_b, ca_s=args.ca_s,
+                                         extrapolate=args.extrapolate,
                                          solvers=tuple(args.solver),
                                          solution_map=False if args.no_map else None, **h)
-        title = f"Dimensionless estimate: nu = {args.nu:g}, lam = {args.lam:g}"
+        title = f"Dimensionless estimate: nu = {args.nu:g}, lam = {args.lam:g}" + (
+            f"; red cell, Ca_S = {args.ca_s:g}" if args.ca_s is not None else "")
     else:
         if args.ca_b is not None:
             raise UsageError("--ca-b goes with --nu/--lam (physical inputs determine Ca_B)")
+        if args.ca_s is not None:
+            raise UsageError("--ca-s goes with --nu/--lam (physical inputs determine Ca_S: "
+                             "--shear-modulus-uN-m)")
         kw = {k: getattr(args, k) for k in ("volume_fl", "area_um2", "diameter_um", "velocity_mm_s",
                                             "plasma_viscosity_mpas", "bending_modulus_j")
               if getattr(args, k) is not None}
+        if args.shear_modulus_uN_m is not None:
+            kw["shear_modulus_un_m"] = args.shear_modulus_uN_m
+        if args.membrane is not None:
+            kw["membrane"] = args.membrane
         with _options(args):
             est = estimate(**kw, hematocrit=args.hematocrit, hematocrit_kind=args.hematocrit_kind,
                            extrapolate=args.extrapolate, solvers=tuple(args.solver),
                            solution_map=False if args.no_map else None)
         i = est.inputs
+        membrane = (f"red cell, G_s = {i['shear_modulus_un_m']:g} uN/m"
+                    if i.get("membrane") == "red-cell" else "vesicle (no shear elasticity)")
         title = (f"Engineering estimate: cell {i['volume_fl']:g} fL, {i['area_um2']:g} um^2 in a "
                  f"{i['diameter_um']:g} um tube; U = {i['velocity_mm_s']:g} mm/s, eta = "
-                 f"{i['plasma_viscosity_mpas']:g} mPa s, kappa = {i['bending_modulus_j']:g} J")
+                 f"{i['plasma_viscosity_mpas']:g} mPa s, kappa = {i['bending_modulus_j']:g} J; "
+                 f"{membrane}")
     out = est.to_dict()
     why = [f"  {k}: {est.quantities[k].note}" for k in QUANTITIES
            if est.quantities[k].value is None and est.quantities[k].note.startswith("no valid")]
@@ -249,8 +267,10 @@ def _single_file_viscosity(args) -> dict:
     law's diameter range is its stored validity range, viscosity.CHEN2020_RANGE.
     """
     with _options(args):
+        # the single-file vesicle model of Chen et al. (the command's law), for the default cell
         est = estimate(diameter_um=args.diameter_um, hematocrit=args.hematocrit,
-                       hematocrit_kind=args.hematocrit_kind, extrapolate=args.extrapolate)
+                       hematocrit_kind=args.hematocrit_kind, extrapolate=args.extrapolate,
+                       membrane="vesicle")
     dp, h_t = est.quantities["dp_plus_R0"], est.quantities["tube_hematocrit"]
     eta, note = None, ""
     if dp.value is None:
@@ -352,11 +372,22 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--bending-modulus-j", type=float,
                    help=f"bending modulus kappa [J], {bounds('bending_modulus_j')} "
                         f"(default {d['bending_modulus_j']:g})")
+    e.add_argument("--shear-modulus-uN-m", type=float,
+                   help=f"membrane shear modulus G_s of a red cell [uN/m], "
+                        f"{bounds('shear_modulus_un_m')} (default {d['shear_modulus_un_m']:g}, "
+                        "Hochmuth & Waugh 1987; measured 4-10); sets Ca_S = eta U/G_s")
+    e.add_argument("--membrane", choices=MEMBRANES,
+                   help="red-cell: bending and shear elasticity (default; V/U, dp+, film, length "
+                        "and tensions from the red-cell map when the cell's beta = G_s R0^2/kappa "
+                        "is the map's, or --solver bem); vesicle: bending only (lipid vesicles, "
+                        "or a red cell's high-velocity limit)")
     e.add_argument("--nu", type=float, help="reduced volume [-] (dimensionless estimate, with --lam)")
     e.add_argument("--lam", type=float, help="confinement R0/R [-] (dimensionless estimate)")
     e.add_argument("--ca-b", type=float, help="bending capillary number eta U R0^2/kappa > 0 [-] "
                    "(with --nu/--lam; when omitted the closed forms assume Chen et al. 2020's "
                    "10 <= Ca_B <= 1e4 and the solvers use 50)")
+    e.add_argument("--ca-s", type=float, help="shear capillary number eta U/G_s > 0 [-] of a "
+                   "red cell (with --nu/--lam and --ca-b; default: a vesicle)")
     e.add_argument("--hematocrit", type=float, help="hematocrit, a fraction in [0, 1) [-]")
     e.add_argument("--hematocrit-kind", choices=("tube", "discharge"), default="tube",
                    help="whether --hematocrit is the tube (H_T) or discharge (H_D) value (default tube)")

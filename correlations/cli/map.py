@@ -289,6 +289,11 @@ def cmd_map_query(args):
         rows.append((k, q["value"], UNITS.get(k, "-"), "+".join(q["methods"]), flag))
     title = (f"Solution map at nu={nu:g}, lam/lam_c={ratio:.6g}, Ca_B={args.ca_b:g} "
              f"({res.source})")
+    if res.membrane is not None:        # never read as a vesicle's answer
+        beta = res.membrane["shear_ratio"]
+        title += (f"\nRED-CELL map: shear ratio beta = G_s R0^2/kappa = {beta:.6g} "
+                  f"(Ca_S = Ca_B/beta = {args.ca_b / beta:.4g}), stress-free shape "
+                  f"{res.membrane['reference']}; not a vesicle's answer")
     return out, "\n".join([format_rows(rows, title)]
                           + [f"note {i}: {n}" for i, n in enumerate(notes, 1)])
 

@@ -17,10 +17,18 @@ import numpy as np
 import pytest
 from hypothesis import example, given, strategies as st
 
-from correlations.estimate import estimate, estimate_dimensionless
+from correlations.estimate import estimate as estimate_any_membrane
+from correlations.estimate import estimate_dimensionless
 from correlations.registry import METHODS, QUANTITIES, check_output
 from correlations.viscosity import viscosity_vitro_pries1992
 from lubrication.checks import CannotPassError, InvalidParameterError
+
+
+def estimate(*args, **kw):
+    """The estimate of a vesicle (the model these tests are about; the red cell's:
+    test_estimate_red_cell.py)."""
+    return estimate_any_membrane(*args, **{"membrane": "vesicle", **kw})
+
 
 # ------------------------------------------------------------------------------------------
 # Independent references (printed formulas only).
