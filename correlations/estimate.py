@@ -659,12 +659,12 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
              plasma_viscosity_mpas: float = RBC_DEFAULTS["plasma_viscosity_mpas"],
              bending_modulus_j: float = RBC_DEFAULTS["bending_modulus_j"],
              shear_modulus_un_m: float = RBC_DEFAULTS["shear_modulus_un_m"], *,
-             membrane: str = "red-cell",
+             membrane: str = "vesicle",
              hematocrit: float | None = None, hematocrit_kind: str = "tube",
              extrapolate: bool = False, solvers: tuple = (), solution_map=None) -> Estimate:
     r"""Engineering estimate from physical inputs (defaults: human RBC in a 4 µm capillary).
 
-    **A red cell** (``membrane="red-cell"``, the default): a membrane with bending, local
+    **A red cell** (``membrane="red-cell"``): a membrane with bending, local
     inextensibility and in-plane shear elasticity (Evans 1973's area-incompressible law, modulus
     G_s; user guide §8). The estimate reports Ca_S = ηU/G_s and β = G_s R0²/κ = Ca_B/Ca_S
     (:func:`physical_scales`). V/U, Δp⁺, film, length, tensions and shape class come from an
@@ -684,8 +684,9 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     geometry, hematocrit conversions and apparent viscosity hold for both (the single-file
     viscosity with the red cell's Δp⁺).
 
-    **A vesicle** (``membrane="vesicle"``): bending and local inextensibility only (lipid
-    vesicles; for a red cell the high-velocity limit Ca_S → ∞). ``shear_modulus_un_m`` is
+    **A vesicle** (``membrane="vesicle"``, the default until the red-cell map is shipped):
+    bending and local inextensibility only (lipid vesicles; for a red cell the high-velocity
+    limit Ca_S → ∞). ``shear_modulus_un_m`` is
     checked but unused, and the result is exactly the estimate before red cells were added.
 
     Parameters
@@ -734,16 +735,16 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
 
     Examples
     --------
-    >>> e = estimate()                       # red cell, 4 µm capillary, 1 mm/s
-    >>> round(e["nu"], 3), round(e["lam"], 3), round(e["d_c_um"], 2), e["passes"]
+    >>> v = estimate()                       # 4 µm capillary, 1 mm/s: the vesicle map answers
+    >>> round(v["nu"], 3), round(v["lam"], 3), round(v["d_c_um"], 2), v["passes"]
     (0.61, 1.39, 2.85, True)
-    >>> round(e["ca_s"], 3), round(e["shear_ratio"], 1)
-    (0.2, 231.9)
-    >>> v = estimate(membrane="vesicle")     # no shear elasticity: the vesicle map answers
     >>> v.regime.split(" (")[0]
     'intermediate confinement'
-    >>> estimate(membrane="vesicle", solution_map=False)["V_over_U"] is None  # closed forms
+    >>> estimate(solution_map=False)["V_over_U"] is None     # closed forms only
     True
+    >>> e = estimate(membrane="red-cell")    # with shear elasticity
+    >>> round(e["ca_s"], 3), round(e["shear_ratio"], 1)
+    (0.2, 231.9)
     """
     kind = check_choice("hematocrit_kind", hematocrit_kind, ("tube", "discharge"))
     membrane = check_choice("membrane", membrane, MEMBRANES)

@@ -377,10 +377,10 @@ def build_parser() -> argparse.ArgumentParser:
                         f"{bounds('shear_modulus_un_m')} (default {d['shear_modulus_un_m']:g}, "
                         "Hochmuth & Waugh 1987; measured 4-10); sets Ca_S = eta U/G_s")
     e.add_argument("--membrane", choices=MEMBRANES,
-                   help="red-cell: bending and shear elasticity (default; V/U, dp+, film, length "
-                        "and tensions from the red-cell map when the cell's beta = G_s R0^2/kappa "
-                        "is the map's, or --solver bem); vesicle: bending only (lipid vesicles, "
-                        "or a red cell's high-velocity limit)")
+                   help="vesicle: bending only (default; lipid vesicles, or a red cell's "
+                        "high-velocity limit); red-cell: bending and shear elasticity (V/U, dp+, "
+                        "film, length and tensions from the red-cell map when the cell's beta = "
+                        "G_s R0^2/kappa is the map's, or --solver bem)")
     e.add_argument("--nu", type=float, help="reduced volume [-] (dimensionless estimate, with --lam)")
     e.add_argument("--lam", type=float, help="confinement R0/R [-] (dimensionless estimate)")
     e.add_argument("--ca-b", type=float, help="bending capillary number eta U R0^2/kappa > 0 [-] "

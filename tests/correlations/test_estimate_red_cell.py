@@ -81,7 +81,7 @@ def test_the_map_knows_its_membrane(red_cell_map):
 
 
 def test_red_cell_rows_come_from_the_red_cell_map(shipped_red_cell_map):
-    e = estimate(hematocrit=0.3)
+    e = estimate(hematocrit=0.3, membrane="red-cell")
     # Ca_S = eta U/G_s, beta = G_s R0^2/kappa, by hand: R0 = (3 * 90 / (4 pi))^(1/3) um
     R0 = (3 * 90.0 / (4 * math.pi)) ** (1 / 3) * 1e-6
     assert e["ca_s"] == pytest.approx(1.2e-3 * 1e-3 / 6e-6, rel=1e-12)
@@ -124,7 +124,7 @@ def test_vesicle_ignores_the_red_cell_map(shipped_red_cell_map):
 @pytest.mark.parametrize("modulus, answers", [(6.0 * (1 + 0.9e-3), True),
                                               (6.0 * (1 + 1.1e-3), False), (8.0, False)])
 def test_beta_must_be_the_maps_within_its_tolerance(shipped_red_cell_map, modulus, answers):
-    e = estimate(shear_modulus_un_m=modulus)
+    e = estimate(shear_modulus_un_m=modulus, membrane="red-cell")
     assert (e["V_over_U"] is not None) == answers
     if not answers:
         note = e.quantities["V_over_U"].note
@@ -137,7 +137,7 @@ def test_beta_must_be_the_maps_within_its_tolerance(shipped_red_cell_map, modulu
 def test_no_extrapolation_beyond_the_red_cell_map(shipped_red_cell_map):
     """Above the map's largest Ca_B a red-cell map refuses: the vesicle's clamp does not apply
     (Ca_S changes along the line)."""
-    e = estimate(velocity_mm_s=10.0)               # Ca_B = 464 > 231.9
+    e = estimate(velocity_mm_s=10.0, membrane="red-cell")               # Ca_B = 464 > 231.9
     assert e["V_over_U"] is None
     assert "outside the map's range" in e.quantities["V_over_U"].note
     assert "clamped" not in e.quantities["V_over_U"].note
@@ -146,7 +146,7 @@ def test_no_extrapolation_beyond_the_red_cell_map(shipped_red_cell_map):
 def test_closed_form_vesicle_laws_never_answer_for_a_red_cell(shipped_red_cell_map):
     """delta = 0.06: the near-critical laws answer for the vesicle, not for the red cell."""
     vesicle = estimate(diameter_um=3.0, membrane="vesicle", solution_map=False)
-    red = estimate(diameter_um=3.0, solution_map=False)
+    red = estimate(diameter_um=3.0, membrane="red-cell", solution_map=False)
     assert vesicle.quantities["V_over_U"].method == "near_critical_barakat2018a"
     for key in ("V_over_U", "dp_plus_R0", "film", "ell", "shape_class", "tension_front"):
         assert red[key] is None and red.quantities[key].method is None, key
@@ -154,7 +154,7 @@ def test_closed_form_vesicle_laws_never_answer_for_a_red_cell(shipped_red_cell_m
 
 
 def test_without_a_red_cell_map_the_estimate_says_so(no_red_cell_map):
-    e = estimate()
+    e = estimate(membrane="red-cell")
     assert e["V_over_U"] is None and e["R0_um"] == pytest.approx(2.7800, abs=1e-4)
     assert "no red-cell map shipped" in e.quantities["V_over_U"].note
     assert any("--solver bem" in n for n in e.notes)
@@ -165,7 +165,7 @@ def test_a_map_of_the_other_membrane_is_refused_before_any_work(red_cell_map):
         estimate(membrane="vesicle", solution_map=red_cell_map)
     if DEFAULT_MAP.exists():
         with pytest.raises(InvalidParameterError, match="vesicle map"):
-            estimate(solution_map=DEFAULT_MAP)
+            estimate(membrane="red-cell", solution_map=DEFAULT_MAP)
 
 
 def test_dimensionless_estimate_takes_ca_s(red_cell_map):
@@ -183,13 +183,17 @@ def test_dimensionless_estimate_takes_ca_s(red_cell_map):
 
 def test_make_run_exits_0_with_and_without_a_red_cell_map(cli, monkeypatch, tmp_path,
                                                           red_cell_map):
-    """`make run` is `vesicle-tube estimate` with the defaults."""
+    """`make run` is `vesicle-tube estimate` with the defaults (a vesicle until the red-cell
+    map is shipped); the red cell answers without a map (saying so) and from one."""
     monkeypatch.setattr(sm, "RED_CELL_MAP", tmp_path / "absent.json")
     code, out, err = cli("estimate")
     assert code == 0, err
+    assert "vesicle (no shear elasticity)" in out
+    code, out, err = cli("estimate", "--membrane", "red-cell")
+    assert code == 0, err
     assert "red cell, G_s = 6 uN/m" in out and "no red-cell map shipped" in out
     monkeypatch.setattr(sm, "RED_CELL_MAP", red_cell_map)
-    code, out, err = cli("estimate", "--json")
+    code, out, err = cli("estimate", "--membrane", "red-cell", "--json")
     assert code == 0, err
     d = json.loads(out)
     assert d["methods"]["V_over_U"]["method"] == "map (BEM, interpolated)"
@@ -202,8 +206,10 @@ def test_make_run_exits_0_with_and_without_a_red_cell_map(cli, monkeypatch, tmp_
     (("--shear-modulus-uN-m", "nan"), "--shear-modulus-uN-m"),
     (("--shear-modulus-uN-m", "inf"), "--shear-modulus-uN-m"),
     (("--shear-modulus-uN-m", "1e9"), "--shear-modulus-uN-m"),
-    (("--velocity-mm-s", "1e-3", "--solver", "bem"), "--velocity-mm-s"),
-    (("--velocity-mm-s", "1e5", "--solver", "lubrication"), "--velocity-mm-s"),
+    (("--membrane", "red-cell", "--velocity-mm-s", "1e-3", "--solver", "bem"),
+     "--velocity-mm-s"),
+    (("--membrane", "red-cell", "--velocity-mm-s", "1e5", "--solver", "lubrication"),
+     "--velocity-mm-s"),
     (("--membrane", "cell"), "--membrane"),
     (("--nu", "0.6", "--lam", "1.3", "--ca-b", "50", "--ca-s", "-1"), "--ca-s"),
     (("--nu", "0.6", "--lam", "1.3", "--ca-b", "50", "--ca-s", "1e-3", "--solver", "bem"),
