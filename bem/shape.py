@@ -447,9 +447,7 @@ def fit_curve(curve: Callable, t0: float, t1: float, n_modes: int, *, density=()
 
 
 def equidistributing_density(curve: SpectralCurve, n_terms: int = 16, *,
-                             floor: float | None = None, gradient: float = 0.0,
-                             load: Callable | None = None,
-                             load_gradient: float = 0.0) -> np.ndarray:
+                             floor: float | None = None, gradient: float = 0.0) -> np.ndarray:
     r"""Density coefficients that spread the parameter evenly in :math:`\int w\,ds`.
 
     Weight :math:`w = (\kappa_1^2 + \kappa_0^2)^{1/2} + \beta\,|d\kappa_1/ds|^{1/3}` (lengths
@@ -476,9 +474,6 @@ def equidistributing_density(curve: SpectralCurve, n_terms: int = 16, *,
     wgt = np.sqrt(k1 * k1 + k0 * k0)
     if gradient:
         wgt = wgt + gradient * np.cbrt(np.abs(np.gradient(k1, s)))
-    if load is not None and load_gradient:
-        q = np.asarray(load(t), dtype=float)
-        wgt = wgt + load_gradient * np.cbrt(np.abs(np.gradient(np.gradient(q, s), s)))
     return _density_from_weight(s, wgt, S, n_terms)
 
 

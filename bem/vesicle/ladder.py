@@ -75,12 +75,10 @@ import numpy as np
 
 from lubrication.checks import Deadline, InvalidParameterError
 from lubrication.geometry import critical_length
-from lubrication.membrane import tension_difference
 from lubrication.results import LubricationResult, Status, leading_status
 
 from ..results import VesicleResult
-from ..shape import SpectralCurve, equidistributing_density, fit_curve
-from ..shear import stretch_squared
+from ..shape import SpectralCurve, fit_curve
 from .inputs import MAX_MODES, VesicleInputs, check_vesicle_inputs
 from .level import solve_level
 from .operator import level_outputs, membrane_profile, self_intersects, vesicle_discretisation
@@ -182,11 +180,6 @@ PAIR_MIN_MODES = 6
 #: lam_c one re-build is enough: at the red blood cell (0.61, 0.71 lam_c) a second one costs a
 #: level (682 BIE solves, 64 modes, against 454 and 56)
 NEAR_CRITICAL_REBUILDS = 2
-
-#: weight of a red cell's load term in its "bend" (or "curvature") arc-length density:
-#: ``load_gradient`` of :func:`bem.shape.equidistributing_density` with the tension difference f
-#: of its shear law as the load (:func:`_density`)
-LOAD_GRADIENT = float(__import__("os").environ.get("VT_LOAD_GRADIENT", "1.0"))
 
 #: level (index in the ladder 16, 24, ...) on whose BEM shape the density is re-built for the
 #: rest of a short vesicle's automatic ladder (the seed's density family; "bend" for uniform)
@@ -597,24 +590,8 @@ def _seed(case: VesicleInputs, plan: LadderPlan, start: _Start,
         raise InvalidParameterError("initial", type(initial).__name__,
                                     "a VesicleResult, SpectralCurve, LubricationResult or None")
     if density != "uniform" and not from_lubrication:
-        seed = fit_curve(seed.sample, 0.0, 1.0, n, density=_density(case, density, seed))
+        seed = fit_curve(seed.sample, 0.0, 1.0, n, density=DENSITIES[density](seed, terms))
     return seed, source
-
-
-def _density(case: VesicleInputs, name: str, curve: SpectralCurve) -> np.ndarray:
-    """Density coefficients of the family ``name`` (a key of DENSITIES) built on ``curve``; for
-    a red cell (``case.shear``) the curvature families also weigh the features of its shear
-    load (:data:`LOAD_GRADIENT`)."""
-    if case.shear is None or name not in ("bend", "curvature"):
-        return DENSITIES[name](curve, case.density_terms)
-    shear = case.shear
-
-    def f(tau):
-        return tension_difference(np.sqrt(stretch_squared(curve, tau, shear)))
-
-    return equidistributing_density(curve, case.density_terms,
-                                    gradient=1.0 if name == "bend" else 0.0,
-                                    load=f, load_gradient=LOAD_GRADIENT)
 
 
 # --- step 4: the climb -------------------------------------------------------------------------
@@ -665,7 +642,7 @@ def _level_seeds(case: VesicleInputs, plan: LadderPlan, i: int, n: int, prev: Sp
     if plan.rebuilds_density(i) and ladder.levels:
         try:
             seeds = [fit_curve(prev.sample, 0.0, 1.0, n,
-                               density=_density(case, plan.rebuilt, prev)), prev]
+                               density=DENSITIES[plan.rebuilt](prev, case.density_terms)), prev]
             ladder.consistent = len(ladder.levels)
         except InvalidParameterError:
             pass
