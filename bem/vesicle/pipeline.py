@@ -34,6 +34,13 @@ stored shape of the other shape class within :data:`BRANCH_REACH`, solved in tur
 converges to that class the point is bistable, and the result says so (``other_branch``, the
 message). ``branch`` asks for one class (only stored shapes of that class are tried, and a
 solve ending in the other class does not count); ``seed_bank=False`` tries the own seed only.
+
+A red cell (``ca_s`` finite: the membrane's shear elasticity, :mod:`bem.shear`) is solved from
+the same starts (the stored shapes are vesicles'); where none converges, the vesicle is solved
+from them and continued in Ca_S down to the case's (:func:`_shear_continuation`), its last
+solve allowed up to MAX_MODES like a stored shape's. Neither the time relaxation (its
+time-dependent solver has no shear elasticity) nor the probe for a second branch is run for a
+red cell.
 """
 
 from __future__ import annotations
@@ -96,9 +103,9 @@ RELAX_TIME = 20.0
 #: towards the parachute of (0.6449, 0.281 λc, 43.9): 1.7e-1 -> 9.2e-2 over 20 R/U).
 RELAX_APPROACH = 0.8
 #: Continuation of a red cell in Ca_S = ηU/G_s when no start reaches it directly
-#: (:func:`_shear_continuation`): the first step, where the shear tensions (G_s times strains of
-#: order one) are a fraction of the flow's tensions (ηU times 10-100), and the factor between
-#: steps.
+#: (:func:`_shear_continuation`): the first step and the factor between steps. At Ca_S = 1 the
+#: shear tensions G_s f are a fraction of the flow's: at (0.61, 0.7 λc, Ca_B 50, Ca_S 0.2) the
+#: tension difference f reaches 2.5 (λ_φ² = 0.19) against an isotropic tension of about 36 ηU.
 SHEAR_START = 1.0
 SHEAR_FACTOR = 3.0
 
@@ -245,7 +252,10 @@ def _shear_continuation(case: VesicleInputs, starts: list[Start], solve, branch:
         if nxt.modes.size == 0 or nxt.status is Status.NO_STEADY_STATE:
             return None, "", f"continuation in Ca_S failed at Ca_S = {q:.3g}: {nxt.message}"
         res = nxt
-    final = solve(res, case)
+    # the continued shape is on a steady branch: as for a stored shape, an estimate still above
+    # the tolerance at the default cap is resolution, so the ladder may climb to MAX_MODES
+    final = solve(res, dataclasses.replace(case, max_modes=MAX_MODES)
+                  if case.max_modes is None and case.n_modes is None else case)
     path = ", ".join(f"{q:.3g}" for q in steps)
     if final.success and branch in (None, final.shape_class):
         return final, f"continuation in Ca_S ({path}) from the vesicle of {label}", ""

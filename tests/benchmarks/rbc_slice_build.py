@@ -1,0 +1,55 @@
+"""Build (or resume) the red-cell slice of the solution map into ``docs/data/rbc_slice_build``.
+
+The estimate's default red cell (:data:`correlations.estimate.RBC_DEFAULTS`: 90 fL, 135 µm²,
+plasma 1.2 mPa s, bending modulus 2e-19 J) with the shear modulus G_s = 6 µN/m (Hochmuth &
+Waugh 1987) and the Evans-Fung disc as stress-free shape: BEM points on ν 0.55-0.7, λ/λc
+0.2-0.95 and the Ca_B of U = 0.06-10 mm/s of that cell, all with the build option
+``shear_ratio`` β = G_s R0²/κ = Ca_B/Ca_S (:data:`correlations.map_build.SHEAR_RATIO`), so
+that each Ca_B line is the one cell at one velocity. Run with ``python
+tests/benchmarks/rbc_slice_build.py [--workers 2] [--max-time 900]``; a rerun resumes (every
+finished point is its own file). ``vesicle-tube map pack docs/data/rbc_slice_build --out
+correlations/data/rbc_slice_map.json`` packs it into the map the red-cell estimate reads.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from correlations.estimate import RBC_DEFAULTS
+from correlations.map_build import SHEAR_RATIO, build_map, make_grid
+from lubrication.geometry import cell_from_volume_area
+
+FOLDER = Path(__file__).resolve().parents[2] / "docs" / "data" / "rbc_slice_build"
+GS_N_M = 6e-6                                            # Hochmuth & Waugh 1987
+VELOCITIES_MM_S = (0.06, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0)
+NU = (0.55, 0.6, 0.65, 0.7)
+LAM_RATIO = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95)
+
+
+def slice_grid() -> tuple[dict, float]:
+    """The grid and β of the default cell (Ca_B rounded to 4 decimals, β to 3: the values the
+    build stores)."""
+    _, R0 = cell_from_volume_area(RBC_DEFAULTS["volume_fl"], RBC_DEFAULTS["area_um2"])
+    R0 = float(R0) * 1e-6
+    kappa = RBC_DEFAULTS["bending_modulus_j"]
+    eta = RBC_DEFAULTS["plasma_viscosity_mpas"] * 1e-3
+    ca_b = [round(eta * u * 1e-3 * R0**2 / kappa, 4) for u in VELOCITIES_MM_S]
+    beta = round(GS_N_M * R0**2 / kappa, 3)
+    return make_grid(nu=list(NU), lam_ratio={"bem": list(LAM_RATIO)}, ca_b=ca_b,
+                     methods=["bem"]), beta
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--max-time", type=float, default=900.0, help="per point [s]")
+    args = p.parse_args(argv)
+    grid, beta = slice_grid()
+    print(build_map(FOLDER, grid, options={"bem": {SHEAR_RATIO: beta}}, workers=args.workers,
+                    max_time=args.max_time, pack=False), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
