@@ -106,9 +106,9 @@ shear law, Evans 1973; G_s the membrane shear modulus). Then:
   another is given) and answer only when the cell's beta equals the map's within
   :data:`SHEAR_RATIO_RTOL` = 1e-3 (:func:`membrane_mismatch`); a vesicle map never answers for
   a red cell, nor a red-cell map for a vesicle. The tolerance: at fixed Ca_B a relative change
-  of beta is the same relative change of Ca_S, and the red cell's answers change with Ca_S by
-  at most |d ln dp+/d ln Ca_S| ~ 0.5 and |d ln V/U / d ln Ca_S| ~ 0.1 (docs/red-cell.md, the
-  largest changes of its table: from 0.2 to 0.5 mm/s in the 6 um tube, Ca_B and Ca_S both
+  of beta is the same relative change of Ca_S, and the red cell's answers change with Ca_S
+  by at most ``|d ln dp+ / d ln Ca_S|`` ~ 0.5 and ``|d ln V/U / d ln Ca_S|`` ~ 0.1
+  (docs/red-cell.md, the largest changes of its table: from 0.2 to 0.5 mm/s in the 6 um tube, Ca_B and Ca_S both
   x2.5, dp+ falls by 34.5 % and V/U rises by 5.5 %, the vesicle's by less than 0.2 %); so
   1e-3 in beta moves dp+ by at most 5e-4 and V/U by 1e-4 relative, well inside the map's
   error bars. Another modulus, bending modulus or cell size needs its own slice or the BEM;
@@ -149,7 +149,7 @@ SOLVERS = ("lubrication", "bem")
 #: The membranes of the estimate (module docstring, "A red cell"): a vesicle (bending, local
 #: inextensibility) and a red cell (also in-plane shear elasticity, Ca_S = eta U/G_s).
 MEMBRANES = ("vesicle", "red-cell")
-#: Largest |beta/beta_map - 1| at which a red-cell map answers for a cell (module docstring).
+#: Largest ``|beta/beta_map - 1|`` at which a red-cell map answers for a cell (module docstring).
 SHEAR_RATIO_RTOL = 1e-3
 #: ``Method.solver`` of the map rows: used unless the caller disables the map.
 MAP = "map"
