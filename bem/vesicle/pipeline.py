@@ -131,11 +131,11 @@ def _starts(case: VesicleInputs, initial, branch: str | None, seed_bank: bool) -
     88, 46 s)."""
     if initial is not None:
         return [Start("initial", lambda: initial, case, own=True)]
-    own = [Start("own", lambda: None, case, own=True)]
-    if not seed_bank:
-        return own
     deeper = (dataclasses.replace(case, max_modes=MAX_MODES)
               if case.max_modes is None and case.n_modes is None else case)
+    own = [Start("own", lambda: None, deeper if case.shear is not None else case, own=True)]
+    if not seed_bank:
+        return own
     ratio = case.lam_ratio
     bank = [Start(seed.label(), lambda seed=seed: seed.curve(case.lam), deeper)
             for seed in load_seed_bank().nearest(case.nu, ratio, case.ca_b, k=BANK_STARTS,
