@@ -128,7 +128,9 @@ def _starts(case: VesicleInputs, initial, branch: str | None, seed_bank: bool) -
     solver: its shape is on a steady branch, so an estimate still above the tolerance at the
     own seed's default cap (80) is resolution, not a spurious minimum (measured at
     (0.6267, 0.7517 λc, Ca_B 439): unresolved at 80 modes, V/U estimate 1.1e-4; converged at
-    88, 46 s)."""
+    88, 46 s). A red cell's own start may too: it converges more slowly in modes than a
+    vesicle (docs/vesicle-solver.md), e.g. (0.5641, 0.319 λc, Ca_B 388.5, Ca_S 0.146) was
+    unresolved at its cap (Δp⁺ estimate 1.4e-4) and converges at 88 modes."""
     if initial is not None:
         return [Start("initial", lambda: initial, case, own=True)]
     deeper = (dataclasses.replace(case, max_modes=MAX_MODES)
