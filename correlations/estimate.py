@@ -40,7 +40,7 @@ from lubrication.checks import (CannotPassError, InvalidParameterError, OutOfRan
                                 check_choice, check_fraction, check_positive, check_range)
 from lubrication.io import provenance
 from lubrication.geometry import (cell_from_volume_area, check_passes, check_reduced_volume,
-                                  critical_diameter_um,
+                                  critical_diameter_um, volume_radius,
                                   critical_length, critical_length_um)
 
 from .formatting import format_value_error
@@ -493,7 +493,7 @@ def _default_cell() -> tuple:
     """``(beta, description)`` of the default red cell (:data:`RBC_DEFAULTS`), the cell the
     shipped red-cell slice was built for: named in the reason when a cell's beta differs."""
     d = RBC_DEFAULTS
-    R0 = (3.0 * d["volume_fl"] / (4.0 * math.pi)) ** (1.0 / 3.0)       # [µm]
+    R0 = volume_radius(d["volume_fl"])                                   # [µm]
     beta = physical_scales(R0, 1.0, 1.0, 1.0, d["bending_modulus_j"],
                            d["shear_modulus_un_m"])["shear_ratio"]
     return beta, (f"G_s {d['shear_modulus_un_m']:g} uN/m, kappa {d['bending_modulus_j']:g} J, "

@@ -79,8 +79,8 @@ from lubrication.io import provenance as run_provenance
 from lubrication.io import temporary_target, write_json
 from lubrication.results import Status, leading_status, status_of
 
-from .solution_map import (POINT_FORMAT, POINT_GLOB, QUANTITIES, pack_map, point_filename,
-                           read_build, read_point, read_points)
+from .solution_map import (POINT_FORMAT, POINT_GLOB, QUANTITIES, SHEAR_RATIO, pack_map,
+                           point_filename, read_build, read_point, read_points)
 
 __all__ = ["DEFAULT_GRID", "DEFAULT_OPTIONS", "LOCK_NAME", "MAX_POINTS", "METHODS", "SOLVERS",
            "BuildInputError", "make_grid", "check_build", "max_workers", "line_tasks",
@@ -200,11 +200,11 @@ class BuildInputError(InvalidParameterError):
         ValueError.__init__(self, f"{exc} (a value of the {method} lines of the build)")
 
 
-#: The BEM option of a red-cell build: the cell's ratio of shear to bending stiffness
-#: β = G_s R0²/κ = Ca_B/Ca_S, a constant of one cell (232 for the estimate's default red cell:
-#: G_s 6 µN/m, R0 2.78 µm, κ 2e-19 J), so that each point has Ca_S = Ca_B/β and a line in Ca_B is
-#: one physical cell at different velocities (:func:`point_options`).
-SHEAR_RATIO = "shear_ratio"
+# The BEM option of a red-cell build, SHEAR_RATIO (defined with the map that reads it,
+# correlations.solution_map): the cell's ratio of shear to bending stiffness
+# β = G_s R0²/κ = Ca_B/Ca_S, a constant of one cell (232 for the estimate's default red cell:
+# G_s 6 µN/m, R0 2.78 µm, κ 2e-19 J), so that each point has Ca_S = Ca_B/β and a line in Ca_B is
+# one physical cell at different velocities (point_options).
 
 
 def point_options(options: dict, ca_b: float) -> dict:

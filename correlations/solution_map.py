@@ -129,7 +129,7 @@ Membrane: a vesicle map or a red-cell map
 A map knows the membrane of its points (:attr:`SolutionMap.membrane`, from the packed
 ``parameters``): None for a vesicle (bending, local inextensibility, no shear elasticity),
 ``{"shear_ratio": β, "reference": name}`` for a red cell built with the BEM option
-``shear_ratio`` β = G_s R0²/κ = Ca_B/Ca_S (:data:`correlations.map_build.SHEAR_RATIO`; Evans's
+``shear_ratio`` β = G_s R0²/κ = Ca_B/Ca_S (:data:`SHEAR_RATIO`, the build option; Evans's
 area-incompressible shear law, Evans 1973, about a stress-free shape ``reference``). A line in
 Ca_B of a red-cell map is one cell (one β) at different velocities, so the Ca_S of a query is
 Ca_B/β. Its answers hold for that β only: the caller compares the cell's β with the map's
@@ -178,7 +178,7 @@ DEFAULT_MAP = Path(__file__).with_name("data") / "solution_map.json"
 #: :attr:`SolutionMap.membrane`); absent until its build has been packed there
 RED_CELL_MAP = Path(__file__).with_name("data") / "rbc_slice_map.json"
 
-#: the build option of a red-cell map (:data:`correlations.map_build.SHEAR_RATIO`): the cell's
+#: the BEM build option of a red-cell map (correlations.map_build.point_options): the cell's
 #: β = G_s R0²/κ = Ca_B/Ca_S, stored in the packed ``parameters.options.bem``
 SHEAR_RATIO = "shear_ratio"
 #: stress-free shape of a red-cell map built without a ``reference`` option: the default of

@@ -4,7 +4,7 @@ The estimate's default red cell (:data:`correlations.estimate.RBC_DEFAULTS`: 90 
 plasma 1.2 mPa s, bending modulus 2e-19 J) with the shear modulus G_s = 6 µN/m (Hochmuth &
 Waugh 1987) and the Evans-Fung disc as stress-free shape: BEM points on ν 0.55-0.7, λ/λc
 0.2-0.95 and the Ca_B of U = 0.06-10 mm/s of that cell, all with the build option
-``shear_ratio`` β = G_s R0²/κ = Ca_B/Ca_S (:data:`correlations.map_build.SHEAR_RATIO`), so
+``shear_ratio`` β = G_s R0²/κ = Ca_B/Ca_S (:data:`correlations.solution_map.SHEAR_RATIO`), so
 that each Ca_B line is the one cell at one velocity. Run with ``python
 tests/benchmarks/rbc_slice_build.py [--workers 2] [--max-time 900]``; a rerun resumes (every
 finished point is its own file). ``vesicle-tube map pack docs/data/rbc_slice_build --out
