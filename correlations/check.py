@@ -111,7 +111,7 @@ from .pressure import dp_plus_film_chen2020
 from .registry import (MAP_DEFAULT_CA_B, SMALL_VESICLE_RANGE, MethodNotApplicable, guarded,
                        map_method_name, resolve_solution_map)
 from .shape import SHAPE_CLASS_RANGE_CHEN2020, shape_class_chen2020
-from .solution_map import outside_reason, query_map_many
+from .solution_map import outside_reason, query_map_many, require_vesicle_map
 
 __all__ = ["COLUMNS", "ERROR_COLUMNS", "KINDS", "WARN_FACTOR", "Verdict", "InputError", "Row",
            "Reference", "CheckResult", "RowReport", "CheckReport", "TOLERANCE_RULE", "format_cell",
@@ -789,7 +789,8 @@ def _resolve_map(choice):
     if choice is False:
         return _NoMap("the solution map is switched off")
     try:
-        return resolve_solution_map(choice)
+        return require_vesicle_map(resolve_solution_map(choice), "the checker's references "
+                                   "are vesicles")
     except MethodNotApplicable as exc:
         return _NoMap(str(exc))
 

@@ -43,11 +43,12 @@ from lubrication.geometry import (cell_from_volume_area, check_passes, check_red
                                   critical_diameter_um, volume_radius,
                                   critical_length, critical_length_um)
 
+from . import viscosity
 from .formatting import format_value_error
 from .registry import (BEM_DEFAULT_CA_B, LUBRICATION_DEFAULT_CA_B, MAP, MAP_DEFAULT_CA_B,
-                       MEMBRANES, METHODS, QUANTITIES, SHEAR_RATIO_RTOL, SOLVER_COST, SOLVERS,
+                       DEFAULT_MEMBRANE, MEMBRANES, METHODS, QUANTITIES, SHEAR_RATIO_RTOL, SOLVER_COST, SOLVERS,
                        Answer, MethodNotApplicable, SolverNotConverged, check_output,
-                       membrane_mismatch)
+                       membrane_mismatch, resolve_solution_map)
 from .solution_map import RED_CELL_MAP, SolutionMap, load_map
 
 __all__ = ["RBC_DEFAULTS", "PHYSICAL_BOUNDS", "RUPTURE_TENSION_MN_M", "UNITS", "Quantity",
@@ -525,6 +526,28 @@ def _check_red_cell_solve(nu: float, ca_s: float, solvers: tuple, ca_s_name: str
             f"{nu_lo:g} <= nu <= {nu_hi:g}; give --membrane vesicle")
 
 
+def _check_red_cell_velocity(solution_map, cell: dict, ca_b: float, u_per_ca_b: float) -> None:
+    """Without a solver, a red cell's velocity must lie in the red-cell map's Ca_B range, checked
+    before any work (InvalidParameterError naming ``velocity_mm_s``, the range in mm/s for this
+    cell: U = Ca_B κ/(η R0²), ``u_per_ca_b`` in mm/s). A cell the map is not made for (another
+    β), or no map, is no error: its rows say why they have no value."""
+    if solution_map is False:
+        return
+    try:
+        m = resolve_solution_map(solution_map, "red-cell")
+    except MethodNotApplicable:
+        return
+    if membrane_mismatch(m, cell):
+        return
+    lo, hi = m.cas[0], m.cas[-1]
+    if not lo <= m.node_ca_b(ca_b) <= hi:
+        raise InvalidParameterError(
+            "velocity_mm_s", ca_b * u_per_ca_b,
+            f"{lo * u_per_ca_b:.3g} to {hi * u_per_ca_b:.3g} mm/s for this cell and plasma",
+            f"outside the red-cell map ({lo:.4g} <= Ca_B <= {hi:.4g}, Ca_B = {ca_b:.4g}); "
+            "--solver bem solves this red cell, --membrane vesicle gives the vesicle")
+
+
 def _red_cell_quantities(ca_s: float, beta: float, given_ca_s: bool = False) -> dict:
     """The rows Ca_S and beta of a red cell (units and sources, like Ca_B's)."""
     if given_ca_s:
@@ -659,12 +682,12 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
              plasma_viscosity_mpas: float = RBC_DEFAULTS["plasma_viscosity_mpas"],
              bending_modulus_j: float = RBC_DEFAULTS["bending_modulus_j"],
              shear_modulus_un_m: float = RBC_DEFAULTS["shear_modulus_un_m"], *,
-             membrane: str = "vesicle",
+             membrane: str = DEFAULT_MEMBRANE,
              hematocrit: float | None = None, hematocrit_kind: str = "tube",
              extrapolate: bool = False, solvers: tuple = (), solution_map=None) -> Estimate:
     r"""Engineering estimate from physical inputs (defaults: human RBC in a 4 µm capillary).
 
-    **A red cell** (``membrane="red-cell"``): a membrane with bending, local
+    **A red cell** (``membrane="red-cell"``, the default): a membrane with bending, local
     inextensibility and in-plane shear elasticity (Evans 1973's area-incompressible law, modulus
     G_s; user guide §8). The estimate reports Ca_S = ηU/G_s and β = G_s R0²/κ = Ca_B/Ca_S
     (:func:`physical_scales`). V/U, Δp⁺, film, length, tensions and shape class come from an
@@ -684,10 +707,9 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     geometry, hematocrit conversions and apparent viscosity hold for both (the single-file
     viscosity with the red cell's Δp⁺).
 
-    **A vesicle** (``membrane="vesicle"``, the default until the red-cell map is shipped):
-    bending and local inextensibility only (lipid vesicles; for a red cell the high-velocity
-    limit Ca_S → ∞). ``shear_modulus_un_m`` is
-    checked but unused, and the result is exactly the estimate before red cells were added.
+    **A vesicle** (``membrane="vesicle"``): bending and local inextensibility only (lipid
+    vesicles; for a red cell the high-velocity limit Ca_S → ∞). ``shear_modulus_un_m`` is
+    checked but unused.
 
     Parameters
     ----------
@@ -730,21 +752,23 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
     CannotPassError
         If the tube is narrower than the critical diameter d_c.
     InvalidParameterError
-        For a bad input, before any work; with a solver enabled for a red cell, a velocity
-        whose Ca_S is outside the solvers' range 0.01-1e4 (named ``velocity_mm_s``).
+        For a bad input, before any work; for a red cell, a velocity (named
+        ``velocity_mm_s``) whose Ca_S is outside the solvers' range 0.01-1e4 with a solver
+        enabled, or without one, outside the Ca_B range of the red-cell map that answers for
+        this cell (0.2-10 mm/s for the default cell and plasma).
 
     Examples
     --------
-    >>> v = estimate()                       # 4 µm capillary, 1 mm/s: the vesicle map answers
-    >>> round(v["nu"], 3), round(v["lam"], 3), round(v["d_c_um"], 2), v["passes"]
+    >>> e = estimate()             # a red cell in a 4 µm capillary at 1 mm/s: the red-cell map
+    >>> round(e["nu"], 3), round(e["lam"], 3), round(e["d_c_um"], 2), e["passes"]
     (0.61, 1.39, 2.85, True)
-    >>> v.regime.split(" (")[0]
-    'intermediate confinement'
-    >>> estimate(solution_map=False)["V_over_U"] is None     # closed forms only
-    True
-    >>> e = estimate(membrane="red-cell")    # with shear elasticity
     >>> round(e["ca_s"], 3), round(e["shear_ratio"], 1)
     (0.2, 231.9)
+    >>> e.regime.split(" (")[0]
+    'intermediate confinement'
+    >>> v = estimate(membrane="vesicle", solution_map=False)  # the vesicle, closed forms only
+    >>> v["V_over_U"] is None
+    True
     """
     kind = check_choice("hematocrit_kind", hematocrit_kind, ("tube", "discharge"))
     membrane = check_choice("membrane", membrane, MEMBRANES)
@@ -787,6 +811,8 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
                 "default_cell": _default_cell()}
     solution_map = _check_solution_map(solution_map)
     _check_map_membrane(solution_map, cell)
+    if cell is not None and not solvers:
+        _check_red_cell_velocity(solution_map, cell, ca_b, U * 1e3 / ca_b)
     state, q = _core(nu, lam, ca_b, hematocrits, diameter_um, extrapolate, solvers, log,
                      solution_map, cell)
     inputs = {"volume_fl": float(volume_fl), "area_um2": float(area_um2), "diameter_um": diameter_um,
@@ -821,3 +847,110 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
                          f"(lysis) range {lo:g}-{hi:g} mN/m.")
     return Estimate(inputs=inputs, quantities={**q, **physical}, regime=_regime(lam, state["delta"]),
                     notes=tuple(notes), provenance=provenance(), converged=not log.get("failures"))
+
+
+# --------------------------------------------------------------------------- single-file viscosity
+
+__all__ += ["SingleFileViscosity", "single_file_viscosity"]
+
+
+@dataclass(frozen=True)
+class SingleFileViscosity:
+    """Result of :func:`single_file_viscosity`.
+
+    ``eta_rel`` [-] with its absolute error bar ``error`` [-] (None where Δp⁺ has none), or
+    None with the reason in ``note``; ``valid`` is False for a flagged extrapolation (Δp⁺ or
+    H_T outside its method's range, or d outside the law's range
+    :data:`correlations.viscosity.CHEN2020_RANGE`); ``membrane`` the membrane used;
+    ``estimate`` the estimate whose Δp⁺ and H_T were used (inputs, Ca_B, Ca_S, methods, error
+    bars).
+    """
+
+    eta_rel: float | None
+    error: float | None
+    valid: bool
+    note: str
+    membrane: str
+    estimate: Estimate
+
+
+def single_file_viscosity(diameter_um: float, hematocrit: float, *,
+                          hematocrit_kind: str = "tube",
+                          velocity_mm_s: float = RBC_DEFAULTS["velocity_mm_s"],
+                          membrane: str = DEFAULT_MEMBRANE,
+                          shear_modulus_un_m: float = RBC_DEFAULTS["shear_modulus_un_m"],
+                          extrapolate: bool = False, **cell) -> SingleFileViscosity:
+    r"""Relative apparent viscosity of single-file flow of a cell at mean velocity U.
+
+    Chen et al. 2020, §IV.D (their equation for the relative viscosity of a dilute train of
+    cells):
+
+    .. math::
+        \eta_{rel} = 1 + \frac{3}{32}\left(\frac{R}{R_0}\right)^4
+                     \frac{\Delta p^+ R_0}{\eta U}\,H_T,
+
+    (:func:`correlations.viscosity.viscosity_single_file_chen2020`) with Δp⁺ and H_T from
+    :func:`estimate` of this cell at this velocity: the map, with its error bar, for the
+    vesicle or the red cell (shear elasticity: Δp⁺ and so η_rel depend on U, Secomb et al.
+    1986). As η_rel − 1 is linear in Δp⁺, the error bar is
+    (η_rel − 1)·err(Δp⁺)/Δp⁺ (the error of H_T, which is given or from the map's V/U, is not
+    added). Without a Δp⁺ or H_T the value is None with the reason, never another law's
+    number.
+
+    Parameters
+    ----------
+    diameter_um : float
+        Tube diameter d = 2R [µm], above the cell's critical diameter.
+    hematocrit : float
+        Hematocrit, a fraction in [0, 1) [-].
+    hematocrit_kind : {"tube", "discharge"}
+        Whether ``hematocrit`` is H_T or H_D (converted as in :func:`estimate`).
+    velocity_mm_s : float
+        Mean velocity U [mm/s] (default 1).
+    membrane : {"red-cell", "vesicle"}, optional
+        The cell's membrane, as in :func:`estimate` (default: a red cell).
+    shear_modulus_un_m : float
+        Red-cell membrane shear modulus G_s [µN/m] (default 6, Hochmuth & Waugh 1987).
+    extrapolate : bool
+        Let the estimate fill Δp⁺ or H_T with flagged extrapolations.
+    **cell
+        ``volume_fl`` [fL], ``area_um2`` [µm²], ``plasma_viscosity_mpas`` [mPa·s],
+        ``bending_modulus_j`` [J], ``solution_map``: as in :func:`estimate` (default: the
+        human red cell of :data:`RBC_DEFAULTS`).
+
+    Returns
+    -------
+    SingleFileViscosity
+
+    Raises
+    ------
+    InvalidParameterError, CannotPassError
+        As :func:`estimate`, before any work (for a red cell without a solver, a velocity
+        outside the red-cell map's range).
+
+    Examples
+    --------
+    >>> r = single_file_viscosity(5.0, 0.3, membrane="vesicle")
+    >>> r.membrane, round(r.eta_rel, 2), r.valid
+    ('vesicle', 1.33, True)
+    """
+    est = estimate(diameter_um=diameter_um, velocity_mm_s=velocity_mm_s,
+                   shear_modulus_un_m=shear_modulus_un_m, membrane=membrane,
+                   hematocrit=hematocrit, hematocrit_kind=hematocrit_kind,
+                   extrapolate=extrapolate, **cell)
+    dp, h_t = est.quantities["dp_plus_R0"], est.quantities["tube_hematocrit"]
+    d = est.inputs["diameter_um"]
+
+    def missing(note: str) -> SingleFileViscosity:
+        return SingleFileViscosity(None, None, False, note, membrane, est)
+    if dp.value is None:
+        return missing(f"no dp+ for this cell and tube: {dp.note}")
+    if h_t.value is None:
+        return missing(f"no tube hematocrit: {h_t.note}")
+    eta = float(viscosity.viscosity_single_file_chen2020(dp.value, d, est["R0_um"], h_t.value))
+    problem = check_output("eta_rel", eta, {})
+    if problem:
+        return missing(f"no eta_rel: {problem}")
+    error = None if dp.error is None or dp.value <= 0 else (eta - 1.0) * dp.error / dp.value
+    valid = dp.valid and h_t.valid and viscosity.CHEN2020_RANGE.contains(diameter_um=d)
+    return SingleFileViscosity(eta, error, valid, "", membrane, est)

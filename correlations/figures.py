@@ -11,7 +11,15 @@ Sources of the numbers
     * the stored points of the map's build folder (:func:`correlations.solution_map.read_points`)
       for node values and the stored BEM shapes (:class:`bem.shape.SpectralCurve`), no solve;
     * a few solves, cached: the BEM Ca_B series at (ν, λ) = (0.84, 1), and at (0.6, 1.94) the
-      lubrication solution and one BEM solve started from the nearest stored BEM shape.
+      lubrication solution and one BEM solve started from the nearest stored BEM shape;
+    * the paper's "RBC theory" (figs. vel, dpa, Kt: the lubrication model of a red cell of
+      Secomb, Skalak, Özkaya & Gross 1986, membrane shear elasticity, high flow rates U/d >
+      50 s⁻¹): our lubrication red cell, the default cell (ν = 0.610, R0 = 2.78 µm, G_s R0²/κ =
+      231.9, Evans–Fung reference disc) with bending at Ca_B = 50 (U = 1.08 mm/s, Ca_S =
+      0.216), one cached continuation along λ/λc (:func:`_rbc_sweep`, which says why bending is
+      kept: without it our model has no solution below λ/λc ≈ 0.91); beside it, dotted, the
+      BEM red cell of the red-cell map (:data:`correlations.solution_map.RED_CELL_MAP`) when
+      that map answers, and our BEM red cell against velocity (:data:`RBC_VELOCITY_DATA`).
 
 Cache
     Every figure's data is one JSON file in ``<out>/cache``, named by the figure and a hash of
@@ -49,17 +57,19 @@ from lubrication.asymptotics import (dp_plus_near_critical, dp_plus_small_sphere
                                      speed_near_critical, speed_slope_near_critical,
                                      speed_small_sphere)
 from lubrication.checks import InvalidParameterError, OutOfRangeWarning
-from lubrication.geometry import critical_confinement, critical_length, critical_reduced_volume
+from lubrication.geometry import (cell_from_volume_area, critical_confinement, critical_length,
+                                  critical_reduced_volume)
 from lubrication.io import atomic_write, clean_json, write_json
 from lubrication.plotting import plot_dp_plus_asymptotics, plot_speed_asymptotics
 
+from .estimate import RBC_DEFAULTS, physical_scales
 from .film import C0_CHEN2020, film_from_capillary_chen2020
 from .files import UnreadableFile, read_json
 from .plotting import plot_relative_viscosity
 from .pressure import (dp_plus_film_chen2020, dp_plus_small_sphere_coupling,
                        dp_plus_speed_fit_chen2020)
 from .shape import transition_reduced_volume_chen2020
-from .solution_map import DEFAULT_MAP, POINT_GLOB, load_map, query_map, read_points
+from .solution_map import DEFAULT_MAP, POINT_GLOB, RED_CELL_MAP, load_map, query_map, read_points
 from .viscosity import (discharge_hematocrit_fahraeus, relative_viscosity,
                         viscosity_single_file_chen2020)
 
@@ -145,15 +155,17 @@ def _figure_map(path):
 
 
 class FigureContext:
-    """What every figure reads: the map, the build folder's points, the cache folder, the
-    BEM time budget, and a progress callback."""
+    """What every figure reads: the map, the build folder's points, the red-cell map (read
+    only if present, for the BEM red cell beside the RBC theory), the cache folder, the BEM
+    time budget, and a progress callback."""
 
     def __init__(self, out, map_path=None, build=None, bem_max_time: float = 900.0,
-                 progress=None):
+                 progress=None, red_cell_map=None):
         self.out = Path(out)
         self.cache = self.out / "cache"
         self.map_path = Path(map_path or DEFAULT_MAP)
         self.map = _figure_map(self.map_path)
+        self.red_cell_map_path = Path(red_cell_map or RED_CELL_MAP)
         self.build = Path(build or Path(DEFAULT_MAP).with_name("solution_map_build"))
         self.bem_max_time = float(bem_max_time)
         self.progress = progress or (lambda text: None)
@@ -529,6 +541,265 @@ def figure_phase(ctx):
     return fig, rows, cached
 
 
+# --------------------------------------------------------------------------- RBC theory
+
+#: λ/λc of the "RBC theory" curve: 0.9999 … 0.99 near λc, then steps of 0.02 (the largest
+#: continuation step of :func:`lubrication.solve.sweep_lubrication`) down to 0.2, the map
+#: curves' lowest ratio; the sweep stops where its continuation does.
+RBC_RATIOS = (0.9999, 0.999, 0.995, 0.99) + tuple(round(0.98 - 0.02 * i, 2) for i in range(40))
+#: Wall-time budget of the RBC-theory sweep [s] (measured on a shared 2-core machine: 45 s to
+#: the end of its branch at λ/λc ≈ 0.24, and 50 s more for the continuation to find that end).
+RBC_SWEEP_MAX_TIME = 300.0
+#: Tolerances of the statements about "RBC theory", fixed before looking at the numbers (the
+#: paper gives none): "very good agreement" ≤ 2 % in V/U (linear axis 1–2: a symbol's size)
+#: and ≤ 10 % in Δp⁺ (0.04 decade on a log axis spanning six decades); "excellent agreement"
+#: ≤ 5 % in η_rel; "almost independent of flow rate": η_rel changes by < 5 % per doubling of U.
+RBC_TOL = {"V_over_U": 0.02, "dp_plus_R0": 0.10, "eta_rel": 0.05, "per_doubling": 0.05}
+#: λ above which the paper finds "very good agreement" with RBC theory (figs. vel, dpa).
+RBC_LAM_AGREE = 1.4
+#: Shear rate U/d above which Secomb et al. (1986) find η_rel independent of flow rate [1/s].
+RBC_HIGH_SHEAR = 50.0
+#: Our BEM red cell against velocity (d = 4, 5, 6, 8 µm, U = 0.06–8 mm/s): the stored results
+#: of ``tests/benchmarks/rbc_shear_bem.py`` (docs/red-cell.md).
+RBC_VELOCITY_DATA = Path(__file__).resolve().parents[1] / "docs" / "data" / "rbc_shear_bem.json"
+#: Tube hematocrit of fig. Kt.
+H_T_KT = 0.45
+
+RBC_LABEL = "RBC theory (our lubrication red cell)"
+#: Why the RBC theory keeps bending (measured; :func:`_rbc_sweep`).
+RBC_WHY = ("with bending, as without it (ca_b = inf, Secomb et al.'s model) our lubrication red "
+           "cell has no solution below λ/λc ≈ 0.91 (λ < 1.78, d > 3.1 µm: its rear pole "
+           "flattens), and where both exist (λ/λc = 0.95, 0.98) V/U and Δp⁺ differ by < 2e-4 "
+           "relative")
+BEM_RBC_LABEL = "red cell, BEM (map)"
+#: The sources the RBC theory is compared with: key of :func:`_rbc_data` -> name in the table.
+RBC_OTHERS = {"vesicle": "the vesicle map (BEM nodes)",
+              "bem": "the BEM red cell of the red-cell map"}
+
+
+def red_cell() -> dict:
+    """The default red cell (:data:`correlations.estimate.RBC_DEFAULTS`: 90 fL, 135 µm², η 1.2
+    mPa s, κ 2e-19 J, G_s 6 µN/m) at the figures' Ca_B: ``nu``, ``R0_um`` [µm], ``shear_ratio``
+    β = G_s R0²/κ, ``ca_b``, ``ca_s`` = Ca_B/β = ηU/G_s and the mean velocity ``U_mm_s``
+    [mm/s] of Ca_B = ηUR0²/κ (Chen et al. 2020 §II).
+
+    Examples
+    --------
+    >>> c = red_cell()
+    >>> round(c["nu"], 3), round(c["R0_um"], 2), round(c["ca_s"], 3), round(c["U_mm_s"], 2)
+    (0.61, 2.78, 0.216, 1.08)
+    """
+    d = RBC_DEFAULTS
+    nu, R0 = (float(v) for v in cell_from_volume_area(d["volume_fl"], d["area_um2"]))
+    at_1mm_s = physical_scales(R0, 1.0, 1.0, d["plasma_viscosity_mpas"],
+                               d["bending_modulus_j"], d["shear_modulus_un_m"])
+    return {"nu": nu, "R0_um": R0, "shear_ratio": at_1mm_s["shear_ratio"], "ca_b": CA_B,
+            "ca_s": CA_B / at_1mm_s["shear_ratio"], "U_mm_s": CA_B / at_1mm_s["ca_b"]}
+
+
+def _rbc_sweep(cell) -> dict:
+    r"""The "RBC theory" of Chen et al. (2020, figs. vel, dpa, Kt): the lubrication model of a
+    red cell of Secomb, Skalak, Özkaya & Gross (1986, J. Fluid Mech. 163, 405) for our default
+    cell, by :func:`lubrication.solve.sweep_lubrication` along :data:`RBC_RATIOS` (continuation
+    from λ/λc = 0.98, warm starts): Evans's area-incompressible shear law relative to the
+    Evans–Fung disc made to the cell's ν (``reference="biconcave"``), Ca_S = Ca_B/β, with
+    bending at Ca_B = 50 (U ≈ 1.08 mm/s: U/d > 50 s⁻¹, Secomb's high-flow-rate regime, for
+    every d < 21 µm).
+
+    Why with bending although Secomb et al.'s model has none: without it (``ca_b=inf``) our
+    solver has no solution below λ/λc ≈ 0.91 (measured: the continuation stops at 0.912, where
+    the rear pole flattens; :func:`lubrication.solve.high_ca_branch_end` refuses below 0.902),
+    i.e. only λ ≥ 1.78, d ≤ 3.1 µm; where both exist they agree within 2e-5 in V/U and 2e-4 in
+    Δp⁺ (λ/λc = 0.95, 0.98), as the paper argues (bending negligible under high confinement).
+    JSON-ready: per ratio success, V/U, Δp⁺R0/(ηU), shape class and the solver's message."""
+    from lubrication.solve import sweep_lubrication  # lazy: scipy off the estimate's start-up
+    t0 = time.perf_counter()
+    res = sweep_lubrication(cell["nu"], RBC_RATIOS, ca_b=cell["ca_b"], ca_s=cell["ca_s"],
+                            reference="biconcave", progress=False, max_time=RBC_SWEEP_MAX_TIME)
+    return {"success": [bool(r.success) for r in res],
+            "V_over_U": [r.V_over_U if r.success else None for r in res],
+            "dp_plus_R0": [r.dp_plus_R0 if r.success else None for r in res],
+            "shape_class": [r.shape_class if r.success else None for r in res],
+            "message": [r.message for r in res], "seconds": time.perf_counter() - t0}
+
+
+def _rbc_map_values(ctx, cell) -> dict:
+    """V/U and Δp⁺R0/(ηU) along :data:`RBC_RATIOS` at the cell's ν and Ca_B from the vesicle
+    map (``vesicle``) and from the BEM red-cell map (``bem``: None, with ``bem_reason``, when
+    that map is missing, unreadable or built for another shear-to-bending ratio β)."""
+    def along(m):
+        rows = [query_map(cell["nu"], r, cell["ca_b"], map=m) for r in RBC_RATIOS]
+        return {q: [row[q] for row in rows] for q in ("V_over_U", "dp_plus_R0")}
+    out = {"vesicle": along(ctx.map), "bem": None, "bem_reason": ""}
+    try:
+        m = load_map(ctx.red_cell_map_path)
+    except (UnreadableFile, InvalidParameterError) as exc:
+        out["bem_reason"] = f"no red-cell map: {exc}"
+        return out
+    beta = (m.membrane or {}).get("shear_ratio")
+    if beta is None or abs(beta / cell["shear_ratio"] - 1.0) > 1e-3:
+        out["bem_reason"] = (f"the red-cell map {ctx.red_cell_map_path.name} has β = "
+                             f"{_fmt(beta)}, not the default cell's {_fmt(cell['shear_ratio'])}")
+        return out
+    out["bem"] = along(m)
+    return out
+
+
+def _rbc_data(ctx) -> tuple[dict, bool]:
+    """The RBC-theory sweep (cached on its own: it depends on no map) and the map values beside
+    it (cached with the two maps' hashes), with λ = (λ/λc) λc and d = 2R0/λ [µm]."""
+    cell = red_cell()
+    params = {"cell": cell, "ratios": RBC_RATIOS, "reference": "biconcave",
+              "max_time": RBC_SWEEP_MAX_TIME}
+    rbc, c1 = ctx.cached("rbc_theory", params, lambda: _rbc_sweep(cell), inputs={})
+    path = ctx.red_cell_map_path
+    digest = hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else None
+    maps, c2 = ctx.cached("rbc_maps", params, lambda: _rbc_map_values(ctx, cell),
+                          inputs={"map_sha256": ctx.fingerprint["map_sha256"],
+                                  "red_cell_map": str(path), "red_cell_map_sha256": digest})
+    if not c1:
+        ctx.progress(f"  RBC theory: {sum(rbc['success'])} of {len(RBC_RATIOS)} λ/λc converged "
+                     f"in {rbc['seconds']:.0f} s")
+    lam_c = float(critical_confinement(cell["nu"]))
+    lam = [r * lam_c for r in RBC_RATIOS]
+    return {"cell": cell, "lam_ratio": list(RBC_RATIOS), "lam": lam,
+            "d_um": [2.0 * cell["R0_um"] / x for x in lam], "rbc": rbc, **maps}, c1 and c2
+
+
+def _rbc_range(data) -> str:
+    """Where the RBC-theory sweep converged, and the reason where it stopped."""
+    ok = [i for i, s in enumerate(data["rbc"]["success"]) if s]
+    if not ok:
+        return f"RBC theory converged nowhere: {data['rbc']['message'][0]}"
+    lo, hi = min(ok, key=lambda i: data["lam"][i]), max(ok, key=lambda i: data["lam"][i])
+    text = (f"RBC theory: our lubrication red cell (ν = {data['cell']['nu']:.3f}, Ca_B = "
+            f"{CA_B:g}, Ca_S = {data['cell']['ca_s']:.3g}, U = {data['cell']['U_mm_s']:.3g} mm/s; "
+            f"{RBC_WHY}) converged for "
+            f"λ/λc = {data['lam_ratio'][lo]:g}–{data['lam_ratio'][hi]:g} (λ = "
+            f"{_fmt(data['lam'][lo], 3)}–{_fmt(data['lam'][hi], 3)}, d = "
+            f"{_fmt(data['d_um'][hi], 3)}–{_fmt(data['d_um'][lo], 3)} µm)")
+    failed = [i for i, s in enumerate(data["rbc"]["success"]) if not s]
+    if failed:
+        first = max(failed, key=lambda i: data["lam"][i])
+        text += f"; not below: {data['rbc']['message'][first][:160]}"
+    return text
+
+
+def _eta_rel(data, dp) -> list:
+    """η_rel at H_T = 0.45 of Δp⁺R0/(ηU) values (None, or Δp⁺ < 0 outside the law) along the
+    RBC ratios: Chen et al. (2020) single-file law with the cell's R0 and d = 2R0/λ."""
+    with _quiet():
+        return [None if v is None or v < 0 else
+                float(viscosity_single_file_chen2020(v, d, data["cell"]["R0_um"], H_T_KT))
+                for v, d in zip(dp, data["d_um"])]
+
+
+def _values(data, source, key) -> list:
+    """Values of ``key`` along the RBC ratios from ``source`` ("rbc", "vesicle", "bem"); η_rel
+    from Δp⁺ by :func:`_eta_rel`; all None for a missing source."""
+    src = data[source]
+    if src is None:
+        return [None] * len(data["lam"])
+    return _eta_rel(data, src["dp_plus_R0"]) if key == "eta_rel" else src[key]
+
+
+def _draw_rbc(ax, data, key, x="lam"):
+    """The RBC-theory curve (solid) and the BEM red cell of the map (dotted) against λ or d,
+    NaN (a gap) where a solve failed or the map has no value; Δp⁺ ≤ 0 of the parallel-flow
+    model (short cells) is left out on the log axes."""
+    for source, style, label in (("rbc", "-", RBC_LABEL), ("bem", ":", BEM_RBC_LABEL)):
+        y = np.array([np.nan if v is None or (key != "V_over_U" and v <= 0) else v
+                      for v in _values(data, source, key)], dtype=float)
+        if np.isfinite(y).any():
+            ax.plot(data[x], y, style, color="tab:brown", lw=2.0, label=label, zorder=4)
+
+
+def _pairs(data, key, other, where=lambda i: True) -> list[tuple]:
+    """(i, ours, theirs) along the RBC ratios, by increasing λ, where the RBC theory and
+    ``other`` both have a value of ``key`` and ``where(i)`` holds."""
+    a, b = _values(data, "rbc", key), _values(data, other, key)
+    return sorted(((i, a[i], b[i]) for i in range(len(a))
+                   if a[i] is not None and b[i] is not None and where(i)),
+                  key=lambda p: data["lam"][p[0]])
+
+
+def _rbc_unchecked(figure, text, paper, tol, data, key, other, where, region) -> Statement:
+    """"not checked" for a comparison of the RBC theory with ``other`` that has no common
+    value ``region`` (e.g. "with λ > 1.4"): the reason names the side that has none."""
+    if not any(v is not None and where(i) for i, v in enumerate(_values(data, "rbc", key))):
+        return Statement(figure, text, paper, "—", tol, "not checked",
+                         f"the RBC theory has no value {region}; {_rbc_range(data)}")
+    if other == "bem":
+        return Statement(figure, text, paper, "—", tol, "not checked", data["bem_reason"] or
+                         f"the red-cell map has no value {region} at ν = "
+                         f"{data['cell']['nu']:.3f}, Ca_B = {CA_B:g}")
+    return _unchecked(figure, text, paper, tol, f"value at ν = {data['cell']['nu']:.3f}, "
+                      f"Ca_B = {CA_B:g} {region} where the RBC theory has one")
+
+
+def _agreement_row(figure, text, paper, data, key, where, region, at) -> Statement:
+    """The paper's "very good" / "excellent agreement" of the BEM vesicle with RBC theory
+    ``region``: the largest relative difference from the vesicle map, against
+    :data:`RBC_TOL` ``[key]``; ``at(i)`` names the place ("λ = 1.41")."""
+    tol = f"≤ {RBC_TOL[key]:g}"
+    pairs = _pairs(data, key, "vesicle", where)
+    if not pairs:
+        return _rbc_unchecked(figure, text, paper, tol, data, key, "vesicle", where, region)
+    i, a, b = max(pairs, key=lambda p: abs(p[1] / p[2] - 1.0))
+    dev = abs(a / b - 1.0)
+    return Statement(figure, text, paper, _fmt(dev, 3), tol, _verdict(dev <= RBC_TOL[key]),
+                     f"largest relative difference, at {at(i)} (RBC theory {_fmt(a)}, vesicle "
+                     f"map {_fmt(b)}), over {len(pairs)} points {at(pairs[0][0])} … "
+                     f"{at(pairs[-1][0])}; vesicle map at ν = {data['cell']['nu']:.3f}, "
+                     f"Ca_B = {CA_B:g}. {_rbc_range(data)}")
+
+
+def _rbc_rows(figure, data, key, name) -> list[Statement]:
+    """Figs. vel and dpa of Chen et al. (2020): "very good agreement [BEM vesicle with RBC
+    theory] when λ > 1.4" and "for small λ the parallel-flow approximation produces smaller
+    V/U and higher Δp⁺" (the sign at the smallest λ where both have a value; for Δp⁺ where
+    the RBC theory's is > 0, as a log axis shows it), against the vesicle map at the cell's ν
+    and, for the second, also against the BEM red cell of the red-cell map (the same model
+    without the parallel-flow approximation)."""
+    lam = data["lam"]
+    rows = [_agreement_row(figure, f"very good agreement of {name} with RBC theory when λ > "
+                           f"{RBC_LAM_AGREE:g}", "very good agreement", data, key,
+                           lambda i: lam[i] > RBC_LAM_AGREE, f"with λ > {RBC_LAM_AGREE:g}",
+                           lambda i: f"λ = {_fmt(lam[i], 3)}")]
+    smaller = key == "V_over_U"
+    want = "smaller" if smaller else "higher"
+    drawn = (lambda i: True) if smaller else (lambda i: data["rbc"]["dp_plus_R0"][i] > 0)
+    for other, what in RBC_OTHERS.items():
+        text = f"for small λ the parallel-flow approximation produces {want} {name}, against {what}"
+        pairs = _pairs(data, key, other, drawn)
+        if not pairs:
+            rows.append(_rbc_unchecked(figure, text, want, "sign", data, key, other, drawn,
+                                       "" if smaller else "with Δp⁺ > 0"))
+            continue
+        i, a, b = pairs[0]
+        signs = [(x < y) if smaller else (x > y) for _, x, y in pairs]
+        runs, start = [], None          # the λ intervals (of common points) where it holds
+        for n, ok in enumerate(signs + [False]):
+            if ok and start is None:
+                start = n
+            elif not ok and start is not None:
+                runs.append(_fmt(lam[pairs[start][0]], 3) + ("" if start == n - 1 else
+                                                             f"–{_fmt(lam[pairs[n - 1][0]], 3)}"))
+                start = None
+        note = (f"at the smallest λ = {_fmt(lam[i], 3)} (d = {_fmt(data['d_um'][i], 3)} µm) "
+                "where both have a value" + ("" if smaller else " and the RBC theory's Δp⁺ > 0 "
+                "(drawn on the log axis)") + f": RBC theory {_fmt(a)}, {what} {_fmt(b)}; "
+                f"{want} at {sum(signs)} of {len(pairs)} common λ = {_fmt(lam[i], 3)}–"
+                f"{_fmt(lam[pairs[-1][0]], 3)}" + (f", for λ = {', '.join(runs)}" if runs else ""))
+        neg = [lam[j] for j, v in enumerate(data["rbc"]["dp_plus_R0"]) if v is not None and v <= 0]
+        if neg and not smaller:
+            note += (f"; the parallel-flow Δp⁺ is ≤ 0 (unphysical, not drawn) for λ ≤ "
+                     f"{_fmt(max(neg), 3)}")
+        rows.append(Statement(figure, text, want, f"{_fmt(a)} vs {_fmt(b)}", "sign",
+                              _verdict(signs[0]), note))
+    return rows
+
+
 # --------------------------------------------------------------------------- figs. vel, dpa
 
 def _node_markers(ax, nodes, key, colors):
@@ -544,7 +815,8 @@ def _node_markers(ax, nodes, key, colors):
 def _curves_plot(ctx, key, plot_laws, ylabel):
     curves, c1 = _map_curves(ctx)
     nodes, c2 = ctx.cached("nodes", {"ca_b": CA_B}, lambda: _used_nodes(ctx))
-    cached = c1 and c2
+    rbc, c3 = _rbc_data(ctx)
+    cached = c1 and c2 and c3
     fig, (ax,) = _new_figure(1, 1, (7.0, 5.0))
     with _quiet():
         plot_laws(nu=NUS, ax=ax)
@@ -562,12 +834,14 @@ def _curves_plot(ctx, key, plot_laws, ylabel):
         if pts:
             ax.plot(*zip(*pts), ":", color=colors[nu], lw=1.0)
     _node_markers(ax, nodes, key, colors)
+    _draw_rbc(ax, rbc, key)
     ax.set_ylabel(ylabel)
     ax.set_xlim(0.0, 2.05)
     ax.legend(fontsize="x-small", ncol=2)
-    ax.set_title("Ca_B = 50: map (thick), BEM nodes (filled), lubrication (open, dotted: "
-                 "stored lubrication points)", fontsize="x-small")
-    return fig, ax, curves, nodes, cached
+    ax.set_title("Ca_B = 50: map (thick), BEM nodes (filled), lubrication (open; dotted: "
+                 f"stored points); brown: red cell, ν = {rbc['cell']['nu']:.3f}",
+                 fontsize="x-small")
+    return fig, ax, curves, nodes, rbc, cached
 
 
 def _small_sphere_rows(figure, nodes, key, law, name, eq):
@@ -594,10 +868,11 @@ def _small_sphere_rows(figure, nodes, key, law, name, eq):
 
 def figure_speed(ctx):
     """Fig. vel of Chen et al. (2020): V/U against λ for ν = 0.6 … 0.98 at Ca_B = 50 (map),
-    with the small-sphere law (eq:small1), the near-critical asymptote (eq:asmyp1) and our
-    lubrication points."""
-    fig, ax, curves, nodes, cached = _curves_plot(ctx, "V_over_U", plot_speed_asymptotics,
-                                                  "V/U [-]")
+    with the small-sphere law (eq:small1), the near-critical asymptote (eq:asmyp1), our
+    lubrication points, and the paper's "RBC theory" (Secomb et al. 1986): our lubrication red
+    cell (:func:`_rbc_sweep`) and, dotted, the BEM red cell of the red-cell map."""
+    fig, ax, curves, nodes, rbc, cached = _curves_plot(ctx, "V_over_U", plot_speed_asymptotics,
+                                                       "V/U [-]")
     ax.set_ylim(0.95, 2.05)
     rows, devs = _small_sphere_rows("speed", nodes, "V_over_U", speed_small_sphere, "V/U",
                                     "small1")
@@ -647,14 +922,17 @@ def figure_speed(ctx):
                           "strict", _verdict(1.0 < min(vals) and max(vals) < 2.0), "map curves")
                 if vals else _unchecked("speed", text, "1 < V/U < 2", "strict",
                                         f"V/U on the curves at Ca_B = {CA_B:g}"))
+    rows += _rbc_rows("speed", rbc, "V_over_U", "V/U")
     return fig, rows, cached
 
 
 def figure_pressure(ctx):
     """Fig. dpa of Chen et al. (2020): Δp⁺R0/(ηU) against λ (map, Ca_B = 50) with eq:small2,
-    eq:asmyp2 and our lubrication points."""
-    fig, ax, curves, nodes, cached = _curves_plot(ctx, "dp_plus_R0", plot_dp_plus_asymptotics,
-                                                  "Δp⁺R0/(ηU) [-]")
+    eq:asmyp2, our lubrication points and "RBC theory" (Secomb et al. 1986) as in
+    :func:`figure_speed`."""
+    fig, ax, curves, nodes, rbc, cached = _curves_plot(ctx, "dp_plus_R0",
+                                                       plot_dp_plus_asymptotics,
+                                                       "Δp⁺R0/(ηU) [-]")
     rows, devs = _small_sphere_rows("pressure", nodes, "dp_plus_R0", dp_plus_small_sphere,
                                     "Δp⁺", "small2")
     text = "ν = 0.6 is an exception at λ < 0.5: enhanced pressure drop"
@@ -689,6 +967,7 @@ def figure_pressure(ctx):
         rows.append(Statement("pressure", text, "ratio 1", _fmt(ratio), "± 0.1",
                               _within(ratio, 1.0, 0.1), "map (lubrication) over eq. asmyp2 at "
                               "λ/λc = 0.9999; eq. asmyp2 drops an O(1) term"))
+    rows += _rbc_rows("pressure", rbc, "dp_plus_R0", "Δp⁺R0/(ηU)")
     return fig, rows, cached
 
 
@@ -1023,12 +1302,116 @@ def figure_tension(ctx):
 
 # --------------------------------------------------------------------------- fig. Kt
 
+def _velocity_rows() -> list[Statement]:
+    """Fig. Kt's "apparent viscosity is almost independent of flow rate at U/d > 50 s⁻¹ but
+    increases with decreasing flow rate at lower shear rates" (Chen et al. 2020 after Secomb
+    et al. 1986), checked on our BEM red cell against velocity (:data:`RBC_VELOCITY_DATA`):
+    η_rel at H_T = 0.45 (Chen et al. single-file law, the cell's R0) between consecutive
+    converged velocities of one tube; "almost independent": every change per doubling of U,
+    (η_b/η_a)^(1/log2(U_b/U_a)) − 1, below :data:`RBC_TOL` ``per_doubling`` in size where the
+    slower velocity has U/d > 50 s⁻¹; "increases": η_rel higher at the slower velocity of
+    every pair whose slower velocity has U/d ≤ 50 s⁻¹."""
+    hi_text = (f"η_rel almost independent of flow rate at U/d > {RBC_HIGH_SHEAR:g} s⁻¹ "
+               "(our BEM red cell)")
+    lo_text = ("η_rel increases with decreasing flow rate at lower shear rates (U/d ≤ "
+               f"{RBC_HIGH_SHEAR:g} s⁻¹, our BEM red cell)")
+    tol = RBC_TOL["per_doubling"]
+    try:
+        stored = read_json(RBC_VELOCITY_DATA, name="data", what="stored BEM red-cell results")
+        R0 = float(stored["parameters"]["R0_um"])
+        cells = [r for k, r in stored["rows"].items() if k.startswith("red cell")
+                 and r["success"]]
+    except (UnreadableFile, KeyError, TypeError, AttributeError, ValueError) as exc:
+        why = f"no stored BEM red cell against velocity ({exc})"
+        return [Statement("viscosity", hi_text, "almost independent", "—", f"< {tol:g} per "
+                          "doubling", "not checked", why),
+                Statement("viscosity", lo_text, "increases", "—", "sign", "not checked", why)]
+    hi, lo = [], []
+    for d in sorted({r["diameter_um"] for r in cells}):
+        line = sorted((r for r in cells if r["diameter_um"] == d), key=lambda r: r["U_mm_s"])
+        with _quiet():
+            eta = [float(viscosity_single_file_chen2020(r["dp_plus_R0"], d, R0, H_T_KT))
+                   for r in line]
+        for (a, ea), (b, eb) in zip(zip(line, eta), zip(line[1:], eta[1:])):
+            per = (eb / ea) ** (1.0 / math.log2(b["U_mm_s"] / a["U_mm_s"])) - 1.0
+            pair = (d, a["U_mm_s"], b["U_mm_s"], ea, eb, per)
+            (hi if 1e3 * a["U_mm_s"] / d > RBC_HIGH_SHEAR else lo).append(pair)
+    def show(p):
+        return (f"d = {p[0]:g} µm, {p[1]:g} → {p[2]:g} mm/s: {_fmt(p[3])} → {_fmt(p[4])} "
+                f"({100 * p[5]:+.1f} % per doubling)")
+
+    def brief(pairs):
+        return "; ".join(f"d = {d:g} µm: " + ", ".join(f"{p[1]:g}→{p[2]:g} {100 * p[5]:+.1f} %"
+                                                        for p in pairs if p[0] == d)
+                         for d in sorted({p[0] for p in pairs}))
+    rows = []
+    if hi:
+        worst = max(hi, key=lambda p: abs(p[5]))
+        rows.append(Statement("viscosity", hi_text, "almost independent",
+                              f"largest change {100 * worst[5]:+.1f} % per doubling of U",
+                              f"< {100 * tol:g} % per doubling", _verdict(abs(worst[5]) < tol),
+                              f"{show(worst)}; per doubling, U in mm/s: {brief(hi)}; H_T = "
+                              f"{H_T_KT:g}, {RBC_VELOCITY_DATA.name}"))
+    else:
+        rows.append(Statement("viscosity", hi_text, "almost independent", "—", f"< {100 * tol:g}"
+                              " % per doubling", "not checked", "no two converged velocities "
+                              f"above U/d = {RBC_HIGH_SHEAR:g} s⁻¹ in one tube"))
+    if lo:
+        up = [p for p in lo if p[3] > p[4]]
+        rows.append(Statement("viscosity", lo_text, "increases", f"higher at the slower "
+                              f"velocity in {len(up)} of {len(lo)} pairs", "every pair",
+                              _verdict(len(up) == len(lo)), f"per doubling, U in mm/s: "
+                              f"{brief(lo)}; H_T = {H_T_KT:g}, {RBC_VELOCITY_DATA.name}"))
+    else:
+        rows.append(Statement("viscosity", lo_text, "increases", "—", "sign", "not checked",
+                              "no converged pair with U/d ≤ "
+                              f"{RBC_HIGH_SHEAR:g} s⁻¹"))
+    return rows
+
+
+def _viscosity_rbc_rows(data) -> list[Statement]:
+    """Fig. Kt of Chen et al. (2020): η_rel of the BEM vesicle "in excellent agreement with
+    the lubrication theory when d ≤ 4 µm", and "when d > 5 µm the parallel-flow approximation
+    of Secomb et al. yields relatively higher η_rel" (at every d > 5 µm where both have a
+    value; against the vesicle map and against the BEM red cell of the red-cell map), at
+    H_T = 0.45 with the cell's ν and R0; then :func:`_velocity_rows`."""
+    d = data["d_um"]
+    rows = [_agreement_row("viscosity", "η_rel of the vesicle in excellent agreement with RBC "
+                           "theory when d ≤ 4 µm", "excellent agreement", data, "eta_rel",
+                           lambda i: d[i] <= 4.0, "with d ≤ 4 µm",
+                           lambda i: f"d = {_fmt(d[i], 3)} µm")]
+
+    def wide(i):
+        return d[i] > 5.0
+    neg = [d[i] for i, v in enumerate(data["rbc"]["dp_plus_R0"]) if v is not None and v < 0]
+    for other, what in RBC_OTHERS.items():
+        text = ("when d > 5 µm the parallel-flow approximation yields relatively higher η_rel, "
+                f"against {what}")
+        pairs = _pairs(data, "eta_rel", other, wide)
+        if not pairs:
+            rows.append(_rbc_unchecked("viscosity", text, "higher", "every d > 5 µm", data,
+                                       "eta_rel", other, wide, "with d > 5 µm"))
+            continue
+        up = [p for p in pairs if p[1] > p[2]]
+        ends = sorted({pairs[0], pairs[-1]}, key=lambda p: d[p[0]])
+        rows.append(Statement("viscosity", text, "higher", f"higher at {len(up)} of "
+                              f"{len(pairs)} d", "every d > 5 µm", _verdict(len(up) == len(pairs)),
+                              f"RBC theory vs {what}: " + ", ".join(
+                                  f"{_fmt(a)} vs {_fmt(b)} at d = {_fmt(d[i], 3)} µm"
+                                  for i, a, b in ends)
+                              + (f"; for d ≥ {_fmt(min(neg), 3)} µm the RBC theory's Δp⁺ < 0: "
+                                 "no η_rel" if neg else "")))
+    return rows + _velocity_rows()
+
+
 def figure_viscosity(ctx):
     """Fig. Kt of Chen et al. (2020): η_rel(d) at H_T = 0.45 from the single-file model
     (Chen §Visco) with the map's Δp⁺ (ν = 0.6, R0 = 2.8 µm, Ca_B = 50) and with eq:asmyp2,
-    and the Pries et al. 1992 in-vitro law (at H_D = 0.45 and at the H_D of H_T = 0.45 by the
-    Fåhræus relation)."""
-    h_t, nu = 0.45, 0.6
+    the Pries et al. 1992 in-vitro law (at H_D = 0.45 and at the H_D of H_T = 0.45 by the
+    Fåhræus relation), and "RBC theory" (Secomb et al. 1986; our lubrication red cell,
+    :func:`_rbc_sweep`) with the BEM red cell of the red-cell map (dotted), both with the
+    default cell's ν and R0 = 2.78 µm."""
+    h_t, nu = H_T_KT, 0.6
     lam_c = float(critical_confinement(nu))
     d_c = 2.0 * R0_RBC_UM / lam_c
 
@@ -1041,6 +1424,8 @@ def figure_viscosity(ctx):
         return {"d": d, "dp": dp, "extra": {f"{k:g}": v for k, v in extra.items()}}
     data, cached = ctx.cached("viscosity", {"nu": nu, "ca_b": CA_B, "R0_um": R0_RBC_UM},
                               compute)
+    rbc, c2 = _rbc_data(ctx)
+    cached = cached and c2
     d = np.array(data["d"])
     ok = np.array([v is not None for v in data["dp"]])
     dp = np.array([v if v is not None else np.nan for v in data["dp"]], dtype=float)
@@ -1057,10 +1442,12 @@ def figure_viscosity(ctx):
         hd = discharge_hematocrit_fahraeus(dv, h_t, constants="pries1992")
         ax.plot(dv, relative_viscosity(dv, hd, law="pries1992"), "c-",
                 label="pries1992 at H_D(H_T = 0.45) (Fåhræus)")
+    _draw_rbc(ax, rbc, "eta_rel", x="d_um")
     ax.axvline(d_c, color="k", lw=0.8)
     ax.set_xscale("linear")
     ax.set_yscale("log")
-    ax.set_title("H_T = 0.45, R0 = 2.8 µm, Ca_B = 50", fontsize="small")
+    ax.set_title(f"H_T = 0.45, R0 = 2.8 µm, Ca_B = 50; brown: red cell ν = "
+                 f"{rbc['cell']['nu']:.3f}, R0 = {rbc['cell']['R0_um']:.3g} µm", fontsize="small")
     ax.legend(fontsize="x-small")
     e = data["extra"]
     with _quiet():
@@ -1106,7 +1493,7 @@ def figure_viscosity(ctx):
                   "reasonable", "—", "—", "not checked", "no number stated; both curves are "
                   "drawn"),
     ]
-    return fig, rows, cached
+    return fig, rows + _viscosity_rbc_rows(rbc), cached
 
 
 #: name -> (caption, function); the order of a full run (cheap first, BEM solves last).

@@ -63,7 +63,8 @@ from lubrication.geometry import critical_confinement
 
 from .estimate import PHYSICAL_BOUNDS, physical_scales
 from .posterior import mixture, nested_intervals, posterior
-from .solution_map import SolutionMap, load_map, outside_reason, query_map
+from .solution_map import (SolutionMap, load_map, outside_reason, query_map,
+                           require_vesicle_map)
 
 __all__ = ["Verdict", "InferredValue", "Fit", "Inference", "infer_map", "infer_cell",
            "mean_velocity_from_gradient",
@@ -354,7 +355,8 @@ def _inverse_map(solution_map) -> SolutionMap:
     """The map to invert (default the shipped one), refused unless it spans at least two ν
     and two λ/λc nodes: two unknowns cannot be fitted inside a single node (a map packed
     from a build of one line or point is read, but cannot be inverted)."""
-    m = solution_map if isinstance(solution_map, SolutionMap) else load_map(solution_map)
+    m = require_vesicle_map(solution_map if isinstance(solution_map, SolutionMap)
+                            else load_map(solution_map), "the inverse estimate is a vesicle's")
     if len(m.nus) < 2 or len(m.ratios) < 2:
         raise InvalidParameterError(
             "map", m.source or "the given map", "a map with at least two nu and two lam/lam_c "

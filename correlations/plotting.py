@@ -2,14 +2,24 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from lubrication.geometry import critical_confinement
+from lubrication.checks import InvalidParameterError, OutOfRangeWarning
+from lubrication.geometry import cell_from_volume_area, critical_confinement, critical_diameter_um
 from lubrication.plotting import plot_dp_plus_asymptotics, plot_speed_asymptotics
 
+from . import viscosity
+from .estimate import RBC_DEFAULTS, single_file_viscosity
+from .registry import DEFAULT_MEMBRANE
 from .viscosity import VISCOSITY_LAWS, relative_viscosity
 
-__all__ = ["plot_relative_viscosity", "plot_estimate", "plot_check"]
+__all__ = ["plot_relative_viscosity", "plot_single_file_viscosity", "plot_estimate", "plot_check"]
+
+#: Mean velocities U [mm/s] of the curves of :func:`plot_single_file_viscosity`: capillary
+#: red-cell speeds around the typical 1 mm/s (the red-cell map spans 0.06-10 mm/s).
+SINGLE_FILE_VELOCITIES_MM_S = (0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0)
 
 
 def _figure(**kwargs):
@@ -57,6 +67,130 @@ def plot_relative_viscosity(diameters_um=None, hematocrits=(0.2, 0.45), laws=VIS
     ax.set_xlabel("d [µm]")
     ax.set_ylabel("η_rel [-]")
     ax.legend()
+    return ax
+
+
+def _diameter_bound(validity, index: int) -> float:
+    """Lower (``index`` 1) or upper (2) diameter bound [µm] of a validity range."""
+    return next(b[index] for b in validity.bounds if b[0] == "diameter_um")
+
+
+def _single_file_curve(diameters_um, hematocrit, velocity_mm_s, membrane, **kw):
+    """η_rel(d) of :func:`~correlations.estimate.single_file_viscosity`, NaN where it has no
+    value (a gap in the line), or None where the map of ``membrane`` does not take this
+    velocity (the estimate refuses it, naming ``velocity_mm_s``)."""
+    values = []
+    with warnings.catch_warnings():     # d > 8 µm is drawn; the plot marks the law's limit
+        warnings.simplefilter("ignore", OutOfRangeWarning)
+        for d in diameters_um:
+            try:
+                r = single_file_viscosity(d, hematocrit, velocity_mm_s=velocity_mm_s,
+                                          membrane=membrane, **kw)
+            except InvalidParameterError as exc:
+                if exc.name == "velocity_mm_s":
+                    return None
+                raise
+            values.append(np.nan if r.eta_rel is None else r.eta_rel)
+    return np.array(values)
+
+
+def plot_single_file_viscosity(hematocrit, hematocrit_kind="tube",
+                               velocity_mm_s=RBC_DEFAULTS["velocity_mm_s"], membrane=DEFAULT_MEMBRANE,
+                               shear_modulus_un_m=RBC_DEFAULTS["shear_modulus_un_m"],
+                               velocities_mm_s=SINGLE_FILE_VELOCITIES_MM_S,
+                               diameter_max_um=12.0, points=60, ax=None, **cell):
+    r"""η_rel(d) of the single-file model (Chen et al. 2020 §IV.D) at several mean velocities.
+
+    One solid line per velocity, labelled ``U = … mm/s`` (the user's ``velocity_mm_s`` is
+    added to ``velocities_mm_s`` and drawn thicker, "this case"); velocities the membrane's
+    map does not take, and lines without any value, are left out; points without a value are
+    gaps (NaN), never zeros. For a red cell, the vesicle at ``velocity_mm_s`` (no shear
+    elasticity: its high-velocity limit) dashed; for reference Pries et al. 1992 in vitro
+    (dotted; discharge hematocrit given, or from the tube hematocrit by the Fåhræus relation
+    with Pries et al. 1992's constants, in each tube, on 3.3 µm and up) and the single-file
+    law's limit, 8 µm (dash-dotted, :data:`correlations.viscosity.CHEN2020_RANGE`). Each point
+    is :func:`correlations.estimate.single_file_viscosity`, about 1 ms on the map.
+
+    Parameters
+    ----------
+    hematocrit : float
+        Hematocrit, a fraction in [0, 1) [-].
+    hematocrit_kind : {"tube", "discharge"}
+        Whether ``hematocrit`` is H_T or H_D.
+    velocity_mm_s : float
+        The case's mean velocity U [mm/s], marked.
+    membrane : {"red-cell", "vesicle"}
+        The cell's membrane, as in :func:`correlations.estimate.estimate` (default: a red cell).
+    shear_modulus_un_m : float
+        Red-cell membrane shear modulus G_s [µN/m].
+    velocities_mm_s : sequence of float
+        The other velocities drawn [mm/s].
+    diameter_max_um : float
+        Widest tube [µm]; the narrowest is just above the cell's critical diameter d_c
+        (``points`` tubes, denser near d_c: d = d_c/x, x evenly spaced from 0.99).
+    points : int
+        Number of tube diameters.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; a new headless figure if None.
+    **cell
+        Cell inputs of :func:`correlations.estimate.estimate` (``volume_fl``, ``area_um2``,
+        ``plasma_viscosity_mpas``, ``bending_modulus_j``, ``solution_map``).
+
+    Returns
+    -------
+    ax : matplotlib.axes.Axes
+        Labels ``d [µm]`` and ``η_rel [-]``, linear x and logarithmic y, a legend.
+
+    Examples
+    --------
+    >>> ax = plot_single_file_viscosity(0.3, membrane="vesicle", velocities_mm_s=(5.0,),
+    ...                                 points=8)
+    >>> [line.get_label() for line in ax.get_lines() if line.get_label().startswith("U =")]
+    ['U = 1 mm/s (this case)', 'U = 5 mm/s']
+    """
+    from matplotlib import colormaps  # lazy: matplotlib
+    if ax is None:
+        ax = _figure(figsize=(7.0, 4.5)).add_subplot()
+    nu, R0 = cell_from_volume_area(cell.get("volume_fl", RBC_DEFAULTS["volume_fl"]),
+                                   cell.get("area_um2", RBC_DEFAULTS["area_um2"]))
+    d_c = float(critical_diameter_um(nu, R0))
+    d = d_c / np.linspace(0.99, d_c / diameter_max_um, points)
+    kw = dict(hematocrit_kind=hematocrit_kind, shear_modulus_un_m=shear_modulus_un_m, **cell)
+    speeds = sorted({*velocities_mm_s, velocity_mm_s})
+    colour = colormaps["viridis"]
+    span = np.log(speeds[-1] / speeds[0]) or 1.0
+    for U in speeds:
+        eta = _single_file_curve(d, hematocrit, U, membrane, **kw)
+        if eta is None or np.isnan(eta).all():
+            continue
+        mine = U == velocity_mm_s
+        ax.plot(d, eta, color=colour(0.9 * np.log(U / speeds[0]) / span),
+                lw=2.5 if mine else 1.2, label=f"U = {U:g} mm/s" + (" (this case)" if mine else ""))
+    if membrane == "red-cell":
+        eta = _single_file_curve(d, hematocrit, velocity_mm_s, "vesicle", **kw)
+        if eta is not None:
+            ax.plot(d, eta, "--", color="k", lw=1.2,
+                    label=f"vesicle (no shear elasticity), U = {velocity_mm_s:g} mm/s")
+    d_p = d[d >= _diameter_bound(viscosity.PRIES1992_RANGE, 1)]
+    h_d = (hematocrit if hematocrit_kind == "discharge" else
+           viscosity.discharge_hematocrit_fahraeus(d_p, hematocrit, constants="pries1992"))
+    ax.plot(d_p, viscosity.viscosity_vitro_pries1992(d_p, h_d), ":", color="0.35", lw=1.5,
+            label="Pries et al. 1992 in vitro" + ("" if hematocrit_kind == "discharge" else
+                                                  " (H_D from Fåhræus)"))
+    ax.axvline(_diameter_bound(viscosity.CHEN2020_RANGE, 2), color="0.6", ls="-.", lw=0.8,
+               label="single-file limit (Chen et al. 2020)")
+    # log y: eta_rel rises steeply towards d_c, and the spread between velocities stays legible
+    ax.set_yscale("log")
+    lo, hi = ax.get_ylim()
+    ticks = [t for t in (1, 1.2, 1.5, 2, 3, 5, 10, 20, 50, 100) if lo <= t <= hi]
+    ax.set_yticks(ticks, [f"{t:g}" for t in ticks])
+    ax.set_yticks([], minor=True)
+    ax.set_xlabel("d [µm]")
+    ax.set_ylabel("η_rel [-]")
+    name = "red cell" if membrane == "red-cell" else "vesicle"
+    ax.set_title(f"single-file model, {name}, {'H_T' if hematocrit_kind == 'tube' else 'H_D'}"
+                 f" = {hematocrit:g}", fontsize="medium")
+    ax.legend(fontsize="small")
     return ax
 
 

@@ -139,7 +139,7 @@ from lubrication.checks import OUTPUT_BOUNDS, ValidityRange, check_output
 from . import film, pressure, shape, viscosity
 from . import solution_map as sm   # its attributes read at call time (tests patch query_map)
 
-__all__ = ["Answer", "BEM_RANGE", "MAP", "MAP_DEFAULT_CA_B", "MEMBRANES", "Method",
+__all__ = ["Answer", "BEM_RANGE", "MAP", "MAP_DEFAULT_CA_B", "DEFAULT_MEMBRANE", "MEMBRANES", "Method",
            "MethodNotApplicable", "SHEAR_RATIO_RTOL",
            "METHODS", "OUTPUT_BOUNDS", "QUANTITIES", "SOLVERS", "SOLVER_COST",
            "SolverNotConverged", "check_output", "map_method_name"]
@@ -149,6 +149,9 @@ SOLVERS = ("lubrication", "bem")
 #: The membranes of the estimate (module docstring, "A red cell"): a vesicle (bending, local
 #: inextensibility) and a red cell (also in-plane shear elasticity, Ca_S = eta U/G_s).
 MEMBRANES = ("vesicle", "red-cell")
+#: The membrane of the physical estimate when none is named: a human red cell, with its shear
+#: elasticity (answered from the shipped red-cell slice of the map).
+DEFAULT_MEMBRANE = "red-cell"
 #: Largest ``|beta/beta_map - 1|`` at which a red-cell map answers for a cell (module docstring).
 SHEAR_RATIO_RTOL = 1e-3
 #: ``Method.solver`` of the map rows: used unless the caller disables the map.

@@ -164,7 +164,7 @@ from lubrication.results import Status, status_of
 from .files import check_input_file, expect, read_json
 
 __all__ = ["FORMAT", "POINT_FORMAT", "POINT_GLOB", "QUANTITIES", "TRANSFORMS", "DEFAULT_MAP",
-           "RED_CELL_MAP", "SHEAR_RATIO", "CA_B_CLAMP_MAX", "membrane_of", "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
+           "RED_CELL_MAP", "SHEAR_RATIO", "CA_B_CLAMP_MAX", "CA_B_NODE_ATOL", "membrane_of", "require_vesicle_map", "MapValue", "MapQuery", "SolutionMap", "point_filename", "read_point",
            "read_points", "read_build", "pack_map", "load_map", "query_map", "query_map_many"]
 
 #: identifiers of the packed file and of a stored point (checked on load)
@@ -233,6 +233,12 @@ _DIGITS = {"residual": 3, "seconds": 3}   # significant digits of a packed colum
 _PACK_RTOL = 5e-10                          # relative rounding of a 10-digit packed value
 _AXES = ("lam", "nu", "ca")      # order of interpolation: lam (x = delta^1/2), ca (log), nu
 _ON_NODE = 1e-12                 # a coordinate this close (relative) to a node is that node
+#: A Ca_B this close (absolute) to a Ca_B node is that node: builds store the Ca_B of a velocity
+#: rounded to 4 decimals (tests/benchmarks/rbc_slice_build.py), so the Ca_B a user's velocity
+#: gives differs from its node by up to 5e-5; moving it there changes a quantity by at most
+#: 5e-5/Ca_B relative per unit of d ln Q/d ln Ca_B (≤ 2e-5 at the red-cell slice's smallest
+#: Ca_B), far below every error bar.
+CA_B_NODE_ATOL = 5e-5
 
 
 # --------------------------------------------------------------------------- file schemas
@@ -788,6 +794,14 @@ class SolutionMap:
         self._values[:, 0] = self._values[_PAD] = 0.0
 
     # ---------------------------------------------------------------- nodes and the rule
+    def node_ca_b(self, ca_b: float) -> float:
+        """``ca_b``, or the Ca_B node within :data:`CA_B_NODE_ATOL` of it."""
+        i = bisect.bisect_left(self.cas, ca_b)
+        for j in (i - 1, i):
+            if 0 <= j < len(self.cas) and abs(self.cas[j] - ca_b) <= CA_B_NODE_ATOL:
+                return self.cas[j]
+        return ca_b
+
     def node(self, nu: float, lam_ratio: float, ca_b: float) -> tuple[int | None, str]:
         """Row used at a grid node (BEM if converged, else lubrication if converged) and ''; or
         (None, the reason it is a hole)."""
@@ -1346,6 +1360,17 @@ class MapQuery:
 
 # --------------------------------------------------------------------------- load
 
+def require_vesicle_map(m: "SolutionMap", purpose: str) -> "SolutionMap":
+    """``m`` if it is a vesicle map; a red-cell map raises InvalidParameterError naming ``map``
+    (its nodes are red cells of one shear ratio, which ``purpose`` would read as vesicles)."""
+    if m.membrane is not None:
+        raise InvalidParameterError(
+            "map", m.source or "the given map", f"a vesicle map ({purpose})",
+            f"it is a red-cell map (shear ratio beta = {m.membrane['shear_ratio']:.4g}), whose "
+            "nodes are red cells, not vesicles")
+    return m
+
+
 def membrane_of(parameters: dict) -> dict | None:
     """The membrane of a map from its packed ``parameters`` (module docstring, Membrane): None
     for a vesicle map, ``{"shear_ratio": β, "reference": name}`` for a red-cell map (a BEM
@@ -1522,6 +1547,7 @@ def query_map_many(nu, lam_ratio, ca_b, map=None, names=tuple(QUANTITIES)) -> li
     together (:meth:`SolutionMap.quantities_many`), each exactly as alone."""
     points = [_point(*p) for p in zip(nu, lam_ratio, ca_b, strict=True)]
     m = map if isinstance(map, SolutionMap) else load_map(map)
+    points = [(n, r, m.node_ca_b(c)) for n, r, c in points]
     reasons = [outside_reason(m, *p) for p in points]
     inside = [p for p, reason in zip(points, reasons) if not reason]
     answers = iter(m.quantities_many(*zip(*inside), names) if inside else ())
@@ -1546,7 +1572,8 @@ def query_map_many(nu, lam_ratio, ca_b, map=None, names=tuple(QUANTITIES)) -> li
 
 def outside_reason(m: SolutionMap, nu: float, lam_ratio: float, ca_b: float) -> str:
     """Why (nu, lam_ratio, ca_b) lies outside the box of map ``m`` ('' if inside), naming the
-    parameter and the map's range."""
+    parameter and the map's range (a Ca_B within :data:`CA_B_NODE_ATOL` of a node is on it)."""
+    ca_b = m.node_ca_b(ca_b)
     eps = _ON_NODE
     if not m.nus[0] * (1 - eps) <= nu <= m.nus[-1] * (1 + eps):
         return f"nu={nu:.6g} outside the map's range {m.nus[0]:g} <= nu <= {m.nus[-1]:g}"

@@ -471,10 +471,13 @@ def test_huge_confinement_gives_the_asymptote_of_nu_c(cli):
 
 
 def test_huge_velocity_no_longer_gives_infinite_ca_b(cli):
-    code, out, _ = cli("estimate", "--velocity-mm-s", "1e6", "--json")
+    code, out, _ = cli("estimate", "--velocity-mm-s", "1e6", "--membrane", "vesicle", "--json")
     obj = strict_json(out)
     R0 = (3.0 * 90.0 / (4.0 * math.pi)) ** (1.0 / 3.0) * 1e-6
     assert code == 0 and obj["ca_b"] == pytest.approx(1.2e-3 * 1e3 * R0**2 / 2e-19, rel=1e-12)
+    # the default red cell: beyond the red-cell map, refused naming the option
+    code, out, err = cli("estimate", "--velocity-mm-s", "1e6")
+    assert code == 2 and "--velocity-mm-s" in err and out == ""
 
 
 # ------------------------------------------------------------------------------------------

@@ -35,9 +35,11 @@ from correlations.cli.figures import add_figures_parser
 from correlations.cli.infer import add_infer_parser
 from correlations.cli.lubrication import add_parser as add_lubrication_parser
 from correlations.cli.map import add_map_parser
-from correlations.estimate import PHYSICAL_BOUNDS, RBC_DEFAULTS, estimate, estimate_dimensionless
-from correlations.plotting import plot_estimate, plot_relative_viscosity
-from correlations.registry import MEMBRANES, QUANTITIES, SOLVERS
+from correlations.estimate import (PHYSICAL_BOUNDS, RBC_DEFAULTS, estimate,
+                                   estimate_dimensionless, single_file_viscosity)
+from correlations.plotting import (plot_estimate, plot_relative_viscosity,
+                                   plot_single_file_viscosity)
+from correlations.registry import DEFAULT_MEMBRANE, MEMBRANES, QUANTITIES, SOLVERS
 
 # Human labels of the output keys (key -> label); keys not listed are printed as they are. A
 # label names the quantity; the "unit" column says what its value is measured in (below).
@@ -60,6 +62,7 @@ LABELS = {
     "discharge_hematocrit": "discharge hematocrit H_D", "eta_rel": "relative apparent viscosity",
     "reduced_area_excess": "reduced excess area 4pi(nu^-2/3 - 1)", "nu_c": "largest nu passing (nu_c)",
     "diameter_um": "tube diameter d", "ratio_HT_over_HD": "Fahraeus ratio H_T/H_D",
+    "velocity_mm_s": "mean velocity U", "membrane": "membrane",
 }
 
 #: The "unit" column of every table holds either a physical unit (um, mm/s, Pa, nm, mN/m) or
@@ -221,6 +224,10 @@ def cmd_viscosity(args) -> dict:
     d, h, kind = args.diameter_um, args.hematocrit, args.hematocrit_kind
     if law == "single-file":
         return _single_file_viscosity(args)
+    given = [OPTIONS[p] for p in _cell_options_given(args)]
+    if given:
+        raise UsageError(f"{', '.join(given)}: only with --law single-file (the {law} law does "
+                         "not depend on the cell's velocity or membrane)")
     notes = []
     with _options(args, tube_hematocrit="--hematocrit", discharge_hematocrit="--hematocrit"):
         d = float(check_positive("diameter_um", d))
@@ -259,50 +266,58 @@ def cmd_viscosity(args) -> dict:
     return out, format_rows(rows, f"Relative apparent viscosity ({law})") + "\n" + UNIT_CONVENTION
 
 
+def _cell_options_given(args) -> dict:
+    """The options of :func:`_add_cell_options` the user gave, by library parameter name."""
+    values = {p: getattr(args, OPTIONS[p].lstrip("-").replace("-", "_")) for p in CELL_PARAMETERS}
+    return {p: v for p, v in values.items() if v is not None}
+
+
 def _single_file_viscosity(args) -> dict:
-    """Chen et al. 2020 single-file model with the estimate's dp+ for an RBC at that diameter.
+    """Chen et al. 2020's single-file law with the estimate's dp+ for the default cell at this
+    diameter, velocity and membrane (:func:`correlations.estimate.single_file_viscosity`).
 
     Only this law is used: where the estimate has no valid dp+ the result is null with the
     reason (or a flagged extrapolation with --extrapolate), never another law's number. The
     law's diameter range is its stored validity range, viscosity.CHEN2020_RANGE.
     """
+    given = _cell_options_given(args)
     with _options(args):
-        # the single-file vesicle model of Chen et al. (the command's law), for the default cell
-        est = estimate(diameter_um=args.diameter_um, hematocrit=args.hematocrit,
-                       hematocrit_kind=args.hematocrit_kind, extrapolate=args.extrapolate,
-                       membrane="vesicle")
-    dp, h_t = est.quantities["dp_plus_R0"], est.quantities["tube_hematocrit"]
-    eta, note = None, ""
-    if dp.value is None:
-        note = f"no dp+ for this cell and tube: {dp.note}"
-    elif h_t.value is None:
-        note = f"no tube hematocrit: {h_t.note}"
-    else:
-        with _options(args):
-            eta = viscosity.viscosity_single_file_chen2020(dp.value, args.diameter_um,
-                                                           est["R0_um"], h_t.value)
-        problem = _unphysical("eta_rel", eta)
-        if problem:
-            eta, note = None, f"no eta_rel: {problem}"
-    in_range = viscosity.CHEN2020_RANGE.contains(diameter_um=args.diameter_um)
-    valid = eta is not None and dp.valid and h_t.valid and in_range
+        res = single_file_viscosity(args.diameter_um, args.hematocrit,
+                                    hematocrit_kind=args.hematocrit_kind,
+                                    extrapolate=args.extrapolate, **given)
+    est, red_cell = res.estimate, res.membrane == "red-cell"
+    dp, h_t, i = est.quantities["dp_plus_R0"], est.quantities["tube_hematocrit"], est.inputs
+    ca_s = est.quantities.get("ca_s")
     out = {"command": "viscosity", "converged": True, "law": "single-file (Chen et al. 2020 §IV.D)",
-           "diameter_um": args.diameter_um, "eta_rel": eta, "valid": valid,
+           "diameter_um": args.diameter_um, "velocity_mm_s": i["velocity_mm_s"],
+           "membrane": res.membrane,
+           "shear_modulus_un_m": i["shear_modulus_un_m"] if red_cell else None,
+           "ca_b": est["ca_b"], "ca_s": ca_s.value if ca_s else None,
+           "eta_rel": res.eta_rel, "eta_rel_error": res.error, "valid": res.valid,
            "tube_hematocrit": h_t.value, "discharge_hematocrit": est["discharge_hematocrit"],
-           "dp_plus_R0": dp.value, "dp_plus_method": dp.method, "note": note,
-           "validity": viscosity.CHEN2020_RANGE.describe(),
+           "dp_plus_R0": dp.value, "dp_plus_R0_error": dp.error, "dp_plus_method": dp.method,
+           "note": res.note, "validity": viscosity.CHEN2020_RANGE.describe(),
            "cell": "RBC defaults (90 fL, 135 um^2)"}
-    if note:
-        out["warnings"] = [note]
-    elif eta is not None and not in_range:
-        out["warnings"] = [f"single-file law used at diameter_um={args.diameter_um:g}, outside "
-                           f"{viscosity.CHEN2020_RANGE.describe()}; the value is extrapolated"]
+    if res.note:
+        out["warnings"] = [res.note]
+    if args.plot:
+        saved(out, "--plot", lambda: save_plot(plot_single_file_viscosity(
+            args.hematocrit, args.hematocrit_kind, **given), args.plot))
+    membrane = (f"red cell, G_s = {i['shear_modulus_un_m']:g} uN/m" if red_cell
+                else "vesicle (no shear elasticity)")
+    eta = (res.eta_rel if res.error is None or res.eta_rel is None
+           else format_value_error(res.eta_rel, res.error))
+    flag = "" if res.valid else res.note or "EXTRAPOLATED (outside validity)"
     rows = [("law", out["law"], "", "", ""),
             (LABELS["diameter_um"], args.diameter_um, "um", "input", ""),
-            *_quantity_rows(est.quantities, ("tube_hematocrit", "discharge_hematocrit", "dp_plus_R0")),
-            (LABELS["eta_rel"], eta, "-", "single-file (Chen 2020)",
-             "" if valid else ("no valid dp+" if eta is None else "EXTRAPOLATED (outside validity)"))]
-    return out, (format_rows(rows, "Apparent viscosity (single-file vesicle model, RBC defaults)")
+            (LABELS["velocity_mm_s"], i["velocity_mm_s"], "mm/s",
+             "input" if args.velocity_mm_s is not None else "default", ""),
+            (LABELS["membrane"], membrane, "", "input" if args.membrane is not None else
+             "default", ""),
+            *_quantity_rows(est.quantities, ("ca_b", "ca_s", "tube_hematocrit",
+                                             "discharge_hematocrit", "dp_plus_R0")),
+            (LABELS["eta_rel"], eta, "-", "single-file (Chen 2020)", flag)]
+    return out, (format_rows(rows, "Apparent viscosity (single-file model, RBC defaults)")
                  + "\n" + UNIT_CONVENTION)
 
 
@@ -334,6 +349,44 @@ def cmd_fahraeus(args) -> dict:
 
 # --------------------------------------------------------------------------- parser
 
+def _bounds(name: str) -> str:
+    """The accepted range of a physical input, ``lo to hi`` (:data:`PHYSICAL_BOUNDS`)."""
+    lo, hi, _ = PHYSICAL_BOUNDS[name]
+    return f"{lo:g} to {hi:g}"
+
+
+#: What each membrane of ``--membrane`` is (its help).
+MEMBRANE_HELP = {
+    "red-cell": "bending and shear elasticity (V/U, dp+, film, length and tensions from the "
+                "red-cell map when the cell's beta = G_s R0^2/kappa is the map's, or estimate "
+                "--solver bem)",
+    "vesicle": "bending only (lipid vesicles, or a red cell's high-velocity limit)",
+}
+
+#: The library parameters of the options of :func:`_add_cell_options` (options: :data:`OPTIONS`).
+CELL_PARAMETERS = ("velocity_mm_s", "shear_modulus_un_m", "membrane")
+
+
+def _add_cell_options(parser, where: str = "") -> None:
+    """``--velocity-mm-s``, ``--shear-modulus-uN-m`` and ``--membrane``, defined once for
+    ``estimate`` and ``viscosity`` (``where``: appended to each help). Their default is None,
+    so that a command sees whether they were given; the library's defaults apply
+    (:data:`RBC_DEFAULTS`, :data:`correlations.registry.DEFAULT_MEMBRANE`) and the library
+    checks the values (before any work; the message names the option, :data:`OPTIONS`)."""
+    d, default = RBC_DEFAULTS, DEFAULT_MEMBRANE
+    parser.add_argument("--velocity-mm-s", type=float,
+                        help=f"mean flow velocity U [mm/s], {_bounds('velocity_mm_s')} "
+                             f"(default {d['velocity_mm_s']:g}){where}")
+    parser.add_argument("--shear-modulus-uN-m", type=float,
+                        help=f"membrane shear modulus G_s of a red cell [uN/m], "
+                             f"{_bounds('shear_modulus_un_m')} (default "
+                             f"{d['shear_modulus_un_m']:g}, Hochmuth & Waugh 1987; measured "
+                             f"4-10); sets Ca_S = eta U/G_s{where}")
+    parser.add_argument("--membrane", choices=MEMBRANES, help="; ".join(
+        f"{m}{' (default)' if m == default else ''}: {MEMBRANE_HELP[m]}"
+        for m in sorted(MEMBRANES, key=lambda m: m != default)) + where)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = Parser(prog="vesicle-tube", description="Vesicles and red blood cells in narrow tubes "
                 "(Stokes flow): geometry, engineering estimates, apparent viscosity.")
@@ -353,34 +406,20 @@ def build_parser() -> argparse.ArgumentParser:
     g.set_defaults(func=cmd_geometry)
 
     e = sub.add_parser("estimate", help="engineering estimate (default: human RBC in a 4 um capillary)")
-    d, b = RBC_DEFAULTS, PHYSICAL_BOUNDS
-
-    def bounds(name):
-        return f"{b[name][0]:g} to {b[name][1]:g}"
+    d, bounds = RBC_DEFAULTS, _bounds
     e.add_argument("--volume-fl", type=float,
                    help=f"cell volume [fL], {bounds('volume_fl')} (default {d['volume_fl']:g})")
     e.add_argument("--area-um2", type=float, help=f"membrane area [um^2], from the sphere of that "
                    f"volume to reduced volume 1e-6 (default {d['area_um2']:g})")
     e.add_argument("--diameter-um", type=float, help=f"tube diameter [um], above the cell's "
                    f"critical diameter, {bounds('diameter_um')} (default {d['diameter_um']:g})")
-    e.add_argument("--velocity-mm-s", type=float,
-                   help=f"mean flow velocity U [mm/s], {bounds('velocity_mm_s')} "
-                        f"(default {d['velocity_mm_s']:g})")
     e.add_argument("--plasma-viscosity-mpas", type=float,
                    help=f"suspending viscosity [mPa s], {bounds('plasma_viscosity_mpas')} "
                         f"(default {d['plasma_viscosity_mpas']:g})")
     e.add_argument("--bending-modulus-j", type=float,
                    help=f"bending modulus kappa [J], {bounds('bending_modulus_j')} "
                         f"(default {d['bending_modulus_j']:g})")
-    e.add_argument("--shear-modulus-uN-m", type=float,
-                   help=f"membrane shear modulus G_s of a red cell [uN/m], "
-                        f"{bounds('shear_modulus_un_m')} (default {d['shear_modulus_un_m']:g}, "
-                        "Hochmuth & Waugh 1987; measured 4-10); sets Ca_S = eta U/G_s")
-    e.add_argument("--membrane", choices=MEMBRANES,
-                   help="vesicle: bending only (default; lipid vesicles, or a red cell's "
-                        "high-velocity limit); red-cell: bending and shear elasticity (V/U, dp+, "
-                        "film, length and tensions from the red-cell map when the cell's beta = "
-                        "G_s R0^2/kappa is the map's, or --solver bem)")
+    _add_cell_options(e)
     e.add_argument("--nu", type=float, help="reduced volume [-] (dimensionless estimate, with --lam)")
     e.add_argument("--lam", type=float, help="confinement R0/R [-] (dimensionless estimate)")
     e.add_argument("--ca-b", type=float, help="bending capillary number eta U R0^2/kappa > 0 [-] "
@@ -415,7 +454,9 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--constants", choices=("pries1990", "pries1992"), default="pries1992",
                    help="Fahraeus constants for hematocrit conversion (default pries1992)")
     v.add_argument("--extrapolate", action="store_true", help="single-file: allow flagged extrapolation")
-    v.add_argument("--plot", metavar="FILE", help="write eta_rel(d) for the laws (PNG)")
+    _add_cell_options(v, " (--law single-file only)")
+    v.add_argument("--plot", metavar="FILE", help="write eta_rel(d) for the laws (PNG); with "
+                   "--law single-file, at several velocities")
     common(v)
     v.set_defaults(func=cmd_viscosity)
 

@@ -4,11 +4,15 @@ coverage.
 Run with ``python tests/benchmarks/map_offgrid.py [--map FILE] [--json FILE] [--points N]``.
 The points are a fixed pseudo-random sample (seed 2026) of (ν, λ/λc, Ca_B) inside the map's
 box, ν in [0.6, 0.98], λ/λc in [0.2, 0.95], log-uniform Ca_B in [5, 500] (or the Ca_B values
-given with ``--ca-b``), none on a node of the map's grid (each coordinate at least 0.2 of a
+given with ``--ca-b``, or the range given with ``--ca-b-range``), none on a node of the map's grid (each coordinate at least 0.2 of a
 grid step from the nearest node; a finer grid thus draws new points where old ones now lie
 near a node). Each is solved directly by the BEM at its default options (Ca_B given; the
 default solve starts from the nearest stored shapes of the seed bank, :mod:`bem.seed_bank`) and
-compared with :func:`query_map` at the same point.
+compared with :func:`query_map` at the same point. For a red-cell map
+(:attr:`~correlations.solution_map.SolutionMap.membrane`) ν is drawn over the map's ν range and
+each point is the red cell of the map's shear ratio β, Ca_S = Ca_B/β (``python
+tests/benchmarks/map_offgrid.py --map correlations/data/rbc_slice_map.json --json
+docs/data/rbc_slice_offgrid.json --points 24 --ca-b-range 4.6372 463.7179``).
 
 Acceptance targets (relative, |map − direct| / |direct|): V/U 0.2 %, Δp⁺ and ℓ 2 %, minimum
 film 5 %; the reported error bar ``error`` should cover |map − direct| at ≥ 90 % of points.
@@ -52,25 +56,27 @@ def _off(value: float, nodes: list[float], log: bool = False) -> bool:
     return abs(x - xs[i]) >= 0.2 * step
 
 
-def sample(n: int, grid: dict, ca_b: list[float] | None = None, seed: int = 2026) -> list[tuple]:
+def sample(n: int, grid: dict, ca_b: list[float] | None = None, seed: int = 2026,
+           nu_range=(0.6, 0.98), ca_b_range=(5.0, 500.0)) -> list[tuple]:
     """``n`` points (ν, λ/λc, Ca_B) of the BEM box, each off the nodes of ``grid`` (the map's
     grid: its ν, its BEM λ/λc, its Ca_B)."""
     rng, out = random.Random(seed), []
+    lo, hi = (math.log(c) for c in ca_b_range)
     while len(out) < n:
-        nu = round(rng.uniform(0.6, 0.98), 4)
+        nu = round(rng.uniform(*nu_range), 4)
         r = round(rng.uniform(0.2, 0.95), 4)
-        ca = (rng.choice(ca_b) if ca_b else
-              round(math.exp(rng.uniform(math.log(5.0), math.log(500.0))), 2))
+        ca = rng.choice(ca_b) if ca_b else round(math.exp(rng.uniform(lo, hi)), 2)
         if (_off(nu, grid["nu"]) and _off(r, grid["lam_ratio"]["bem"])
                 and (ca_b or _off(ca, grid["ca_b"], log=True))):
             out.append((nu, r, ca))
     return out
 
 
-def _direct(nu: float, r: float, ca: float) -> dict:
-    """The default solve at one point."""
+def _direct(nu: float, r: float, ca: float, shear_ratio: float | None = None) -> dict:
+    """The default solve at one point (a red cell of shear ratio β = Ca_B/Ca_S if given)."""
     t0 = time.perf_counter()
-    res = solve_vesicle(nu, lam_ratio=r, ca_b=ca)
+    red_cell = {} if shear_ratio is None else {"ca_s": ca / shear_ratio, "max_time": 900.0}
+    res = solve_vesicle(nu, lam_ratio=r, ca_b=ca, **red_cell)   # the red-cell build's time cap
     d = res.to_dict(shape=False)
     return {"success": bool(res.success), "message": res.message, "seed": res.seed,
             "seconds": round(time.perf_counter() - t0, 1),
@@ -115,6 +121,8 @@ def main(argv=None) -> int:
     ap.add_argument("--points", type=int, default=32, help="number of points (default 32)")
     ap.add_argument("--ca-b", type=float, nargs="+", help="Ca_B values to sample from "
                     "(default: log-uniform in [5, 500])")
+    ap.add_argument("--ca-b-range", type=float, nargs=2, metavar=("LO", "HI"),
+                    help="log-uniform Ca_B range (default 5 500)")
     args = ap.parse_args(argv)
     if args.points < 1:
         ap.error(f"--points must be >= 1, got {args.points}")
@@ -128,10 +136,14 @@ def main(argv=None) -> int:
     rows = []
     print(f"{'nu':>6} {'r':>6} {'Ca_B':>7} {'s':>5}  " + "  ".join(
         f"{q:>10} {'rel err':>8} {'bar':>8}" for q in TARGETS), flush=True)
-    for point in sample(args.points, m.grid, args.ca_b):
+    beta = m.membrane["shear_ratio"] if m.membrane else None
+    box = {"nu_range": (m.nus[0], m.nus[-1])} if beta else {}
+    if args.ca_b_range:
+        box["ca_b_range"] = tuple(args.ca_b_range)
+    for point in sample(args.points, m.grid, args.ca_b, **box):
         row = done.get(point)
         if row is None or (not row["direct"]["success"] and "seed" not in row["direct"]):
-            row = {"point": list(point), "direct": _direct(*point)}
+            row = {"point": list(point), "direct": _direct(*point, shear_ratio=beta)}
         query = query_map(*point, map=m)
         row["map"] = {q: {"value": query.quantities[q].value, "error": query.quantities[q].error,
                           "note": query.quantities[q].note} for q in TARGETS}

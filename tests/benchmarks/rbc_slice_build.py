@@ -7,17 +7,23 @@ Waugh 1987) and the Evans-Fung disc as stress-free shape: BEM points on ν 0.55-
 ``shear_ratio`` β = G_s R0²/κ = Ca_B/Ca_S (:data:`correlations.solution_map.SHEAR_RATIO`), so
 that each Ca_B line is the one cell at one velocity. Run with ``python
 tests/benchmarks/rbc_slice_build.py [--workers 2] [--max-time 900]``; a rerun resumes (every
-finished point is its own file). ``vesicle-tube map pack docs/data/rbc_slice_build --out
-correlations/data/rbc_slice_map.json`` packs it into the map the red-cell estimate reads.
+finished point is its own file). ``python tests/benchmarks/rbc_slice_build.py --pack
+correlations/data/rbc_slice_map.json`` packs its complete velocity lines (:func:`pack_complete`)
+into the map the red-cell estimate reads.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import shutil
+import tempfile
 from pathlib import Path
 
 from correlations.estimate import RBC_DEFAULTS
 from correlations.map_build import SHEAR_RATIO, build_map, make_grid
+from correlations.solution_map import pack_map, read_build
+from lubrication.io import write_json
 from lubrication.geometry import cell_from_volume_area
 
 FOLDER = Path(__file__).resolve().parents[2] / "docs" / "data" / "rbc_slice_build"
@@ -40,14 +46,45 @@ def slice_grid() -> tuple[dict, float]:
                      methods=["bem"]), beta
 
 
+def pack_complete(out: Path) -> tuple[Path, list[float]]:
+    """Pack the slice's complete velocity lines (every (ν, λ/λc) point stored, converged or
+    not) into the map file ``out``; returns it and the Ca_B of the lines packed. Lines still
+    building are left out, so that the map's Ca_B range is the range it was built over: the
+    estimate refuses a velocity outside it instead of answering from a line of holes."""
+    build = read_build(FOLDER)
+    files = {}
+    for f in FOLDER.glob("bem_*.json"):
+        p = json.loads(f.read_text())
+        files[(p["nu"], p["lam_ratio"], p["ca_b"])] = f
+    grid = build["grid"]
+    done = [c for c in grid["ca_b"] if all((nu, r, c) in files for nu in grid["nu"]
+                                          for r in grid["lam_ratio"]["bem"])]
+    with tempfile.TemporaryDirectory() as tmp:
+        write_json(Path(tmp) / "build.json", {**build, "grid": {**grid, "ca_b": done}},
+                   indent=1, sort_keys=False)
+        for key, f in files.items():
+            if key[2] in done:
+                shutil.copy2(f, Path(tmp) / f.name)
+        return pack_map(tmp, out), done
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--max-time", type=float, default=900.0, help="per point [s]")
+    p.add_argument("--retry-failed", action="store_true",
+                   help="solve again the stored points that did not converge")
+    p.add_argument("--pack", type=Path, metavar="FILE",
+                   help="instead of building, pack the complete velocity lines into FILE")
     args = p.parse_args(argv)
+    if args.pack:
+        path, done = pack_complete(args.pack)
+        print(f"packed {path}: Ca_B {', '.join(f'{c:g}' for c in done)}")
+        return 0
     grid, beta = slice_grid()
     print(build_map(FOLDER, grid, options={"bem": {SHEAR_RATIO: beta}}, workers=args.workers,
-                    max_time=args.max_time, pack=False), flush=True)
+                    max_time=args.max_time, retry_failed=args.retry_failed,
+                    pack=False), flush=True)
     return 0
 
 

@@ -134,13 +134,25 @@ def test_beta_must_be_the_maps_within_its_tolerance(shipped_red_cell_map, modulu
         assert all(e[k] is None for k in FROM_MAP)
 
 
-def test_no_extrapolation_beyond_the_red_cell_map(shipped_red_cell_map):
-    """Above the map's largest Ca_B a red-cell map refuses: the vesicle's clamp does not apply
-    (Ca_S changes along the line)."""
-    e = estimate(velocity_mm_s=10.0, membrane="red-cell")               # Ca_B = 464 > 231.9
-    assert e["V_over_U"] is None
-    assert "outside the map's range" in e.quantities["V_over_U"].note
-    assert "clamped" not in e.quantities["V_over_U"].note
+@pytest.mark.parametrize("velocity", [10.0, 0.1])      # Ca_B 464 > 231.9; 4.6 < 9.27
+def test_a_velocity_outside_the_red_cell_map_is_refused(shipped_red_cell_map, velocity):
+    """Outside the map's Ca_B range a red-cell map refuses before any work, naming the velocity
+    and its range for this cell (U = Ca_B κ/(η R0²): 9.27-231.9 ↔ 0.2-5 mm/s): the vesicle's
+    clamp does not apply (Ca_S changes along the line)."""
+    with pytest.raises(InvalidParameterError, match=r"velocity_mm_s=.* valid range 0\.2 to 5 "
+                       r"mm/s.*outside the red-cell map"):
+        estimate(velocity_mm_s=velocity, membrane="red-cell")
+    # with a solver the velocity is the solver's to take; another cell is not the map's
+    assert estimate(velocity_mm_s=velocity, shear_modulus_un_m=7.0)["V_over_U"] is None
+
+
+@pytest.mark.parametrize("velocity", [0.2, 5.0])
+def test_the_velocities_of_the_end_lines_are_on_them(shipped_red_cell_map, velocity):
+    """The build stores each line's Ca_B rounded to 4 decimals (9.2744 for the Ca_B 9.27436 of
+    0.2 mm/s): the velocity of an end line is inside the map and answered on that line."""
+    e = estimate(velocity_mm_s=velocity, membrane="red-cell")
+    assert e["V_over_U"] is not None and e.quantities["V_over_U"].error is not None
+    assert abs(e["ca_b"] - round(e["ca_b"], 4)) > 0          # not the stored node itself
 
 
 def test_closed_form_vesicle_laws_never_answer_for_a_red_cell(shipped_red_cell_map):
@@ -183,17 +195,17 @@ def test_dimensionless_estimate_takes_ca_s(red_cell_map):
 
 def test_make_run_exits_0_with_and_without_a_red_cell_map(cli, monkeypatch, tmp_path,
                                                           red_cell_map):
-    """`make run` is `vesicle-tube estimate` with the defaults (a vesicle until the red-cell
-    map is shipped); the red cell answers without a map (saying so) and from one."""
+    """`make run` is `vesicle-tube estimate` with the defaults (a red cell); the red cell
+    answers without a map (saying so) and from one; the vesicle on request."""
     monkeypatch.setattr(sm, "RED_CELL_MAP", tmp_path / "absent.json")
-    code, out, err = cli("estimate")
+    code, out, err = cli("estimate", "--membrane", "vesicle")
     assert code == 0, err
     assert "vesicle (no shear elasticity)" in out
-    code, out, err = cli("estimate", "--membrane", "red-cell")
+    code, out, err = cli("estimate")
     assert code == 0, err
     assert "red cell, G_s = 6 uN/m" in out and "no red-cell map shipped" in out
     monkeypatch.setattr(sm, "RED_CELL_MAP", red_cell_map)
-    code, out, err = cli("estimate", "--membrane", "red-cell", "--json")
+    code, out, err = cli("estimate", "--json")
     assert code == 0, err
     d = json.loads(out)
     assert d["methods"]["V_over_U"]["method"] == "map (BEM, interpolated)"
@@ -238,3 +250,14 @@ def test_registry_rule_is_symmetric(red_cell_map):
     m = load_map(red_cell_map)
     assert registry.membrane_mismatch(m, {}).startswith("the map is a red-cell map")
     assert registry.membrane_mismatch(m, {"membrane": "red-cell", "shear_ratio": BETA}) == ""
+
+
+@pytest.mark.parametrize("argv", [
+    ("check", str(Path(__file__).parents[2] / "docs" / "data" / "chen2020_table1.csv")),
+    ("infer", "--v-over-u", "1.2", "--length-um", "8", "--diameter-um", "5", "--u-mm-s", "1"),
+])
+def test_vesicle_commands_refuse_a_red_cell_map(cli_usage_error, red_cell_map, argv):
+    """The checker's references and the inverse estimate are vesicles: a red-cell map given to
+    them is refused before any work, naming --map."""
+    line = cli_usage_error(*argv, "--map", str(red_cell_map))
+    assert "--map" in line and "it is a red-cell map" in line, line

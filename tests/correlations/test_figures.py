@@ -2,12 +2,45 @@
 a comparison row against an independent value (fast: the figures used read the shipped map)."""
 
 import json
+import math
 import os
 
 import numpy as np
 import pytest
 
 from cli_helpers import strict_json
+
+from correlations import figures
+
+#: the RBC-theory sweep as the tests see it (the real one: a continuation of ~1.5 min)
+REAL_RBC_SWEEP = figures._rbc_sweep
+#: λ/λc where the stand-in sweep fails: the lowest ratios (the end of the branch) and one
+#: inside, so that a gap must show in the drawn curve
+FAKE_FAILED = {0.2, 0.22, 0.24, 0.6}
+RBC_CALLS = []
+
+
+def _fake_rbc_sweep(cell):
+    """Stands in for :func:`correlations.figures._rbc_sweep`: plausible values (V/U = 1 + δ/2,
+    Δp⁺ = 5λ⁶/δ − 0.3, negative for the shortest cells as the parallel-flow model gives),
+    failures at :data:`FAKE_FAILED`."""
+    RBC_CALLS.append(cell)
+    r = np.array(figures.RBC_RATIOS)
+    ok = [x not in FAKE_FAILED for x in figures.RBC_RATIOS]
+    return {"success": ok,
+            "V_over_U": [1.0 + 0.5 * (1.0 - x) if o else None for x, o in zip(r, ok)],
+            "dp_plus_R0": [5.0 * x**6 / (1.0 - x) - 0.3 if o else None for x, o in zip(r, ok)],
+            "shape_class": [None] * len(r), "seconds": 0.0,
+            "message": ["converged" if o else "fake: diverged" for o in ok]}
+
+
+@pytest.fixture(autouse=True)
+def fake_rbc_sweep(monkeypatch, tmp_path):
+    """Every test here draws the RBC theory from the stand-in, and without a red-cell map
+    unless it gives one (the shipped one is a preliminary pack)."""
+    RBC_CALLS.clear()
+    monkeypatch.setattr(figures, "_rbc_sweep", _fake_rbc_sweep)
+    monkeypatch.setattr(figures, "RED_CELL_MAP", tmp_path / "no_red_cell_map.json")
 
 
 @pytest.mark.parametrize("argv, option", [
@@ -147,7 +180,8 @@ def test_a_map_with_holes_where_the_statements_read_answers_not_checked(tmp_path
         assert rows and {r.verdict for r in rows} <= {"agree", "disagree", "not checked"}
         unchecked += [r for r in rows if r.verdict == "not checked"]
     assert {r.figure for r in unchecked} == {"speed", "pressure", "film_ca", "dp_scalings"}
-    assert all(r.note.startswith("the map has no ") and r.ours == "—" for r in unchecked)
+    assert all((r.note.startswith("the map has no ") or "red-cell map" in r.statement)
+               and r.ours == "—" for r in unchecked)
     assert any("λ < 0.5 at ν = 0.6" in r.note for r in unchecked)
 
 
@@ -180,3 +214,123 @@ def test_a_damaged_cache_file_is_ignored_and_recomputed(tmp_path, damage):
     assert (data, cached, len(calls)) == ({"values": [1.0, 2.5], "n": 3}, False, 2)
     assert len(said) == 1 and "ignored" in said[0] and path.name in said[0]
     assert ctx.cached("probe", {"a": 1}, compute) == (data, True) and len(calls) == 2
+
+
+# ----------------------------------------------------------------------------- RBC theory
+
+RBC_STATEMENTS = {"speed": 3, "pressure": 3, "viscosity": 5}
+
+
+@pytest.fixture(scope="module")
+def red_cell_map(tmp_path_factory):
+    """A tiny red-cell map of our own build (fake solver, the default cell's β = G_s R0²/κ):
+    ν 0.6, 0.65, λ/λc 0.3, 0.6, 0.9, Ca_B around 50."""
+    from unittest import mock
+
+    from test_readers import _fake_solver
+
+    from correlations import map_build
+    grid = map_build.make_grid([0.6, 0.65], [0.3, 0.6, 0.9], [46.3718, 92.7436], ["bem"])
+    with mock.patch.dict(map_build.SOLVERS, {"bem": _fake_solver({})}):
+        return map_build.build_map(tmp_path_factory.mktemp("rbc"), grid, workers=1,
+                                   options={"bem": {"shear_ratio": 231.859}})["map"]
+
+
+def _line(fig, label):
+    (line,) = [ln for ln in fig.axes[0].get_lines() if ln.get_label() == label]
+    return np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float)
+
+
+def test_rbc_theory_is_drawn_only_where_it_converged_and_its_statements_have_verdicts(
+        tmp_path, red_cell_map):
+    """The RBC-theory curve of figs. vel, dpa and Kt is drawn from the sweep, a gap (NaN)
+    wherever a solve failed (and, on the log axes, where its Δp⁺ ≤ 0), never a value there;
+    the BEM red cell of the red-cell map is drawn beside it; each figure carries its RBC
+    statements with a verdict, the unchecked ones with their reason."""
+    ctx = figures.FigureContext(tmp_path, red_cell_map=red_cell_map)
+    fake = _fake_rbc_sweep(figures.red_cell())
+    failed = np.array([not s for s in fake["success"]])
+    dp = np.array([np.nan if v is None else v for v in fake["dp_plus_R0"]])
+    for name, key in (("speed", "V_over_U"), ("pressure", "dp_plus_R0"),
+                      ("viscosity", None)):
+        fig, rows, _ = figures.FIGURES[name][1](ctx)
+        x, y = _line(fig, figures.RBC_LABEL)
+        assert len(x) == len(figures.RBC_RATIOS)
+        assert np.all(np.isnan(y[failed]))
+        gap = failed if key == "V_over_U" else failed | (dp <= 0)
+        assert np.all(np.isfinite(y[~gap])) and np.isnan(y[gap]).any()
+        if key == "V_over_U":
+            assert y[~gap] == pytest.approx(np.array(fake["V_over_U"], float)[~gap])
+        assert np.isfinite(_line(fig, figures.BEM_RBC_LABEL)[1]).any()
+        rbc = [r for r in rows if "RBC theory" in r.statement or "parallel-flow" in r.statement
+               or "flow rate" in r.statement]
+        assert len(rbc) == RBC_STATEMENTS[name], [r.statement for r in rbc]
+        assert all(r.verdict in ("agree", "disagree") and r.ours != "—" for r in rbc), rbc
+    assert len(RBC_CALLS) == 2          # the check's own call and one sweep for three figures
+
+
+def test_rbc_statements_without_a_red_cell_map_say_not_checked_and_why(tmp_path):
+    """No red-cell map: the BEM red cell is not drawn and the statements against it are "not
+    checked", naming the missing map; those against the vesicle map still have verdicts."""
+    ctx = figures.FigureContext(tmp_path)
+    fig, rows, _ = figures.figure_speed(ctx)
+    assert figures.BEM_RBC_LABEL not in [ln.get_label() for ln in fig.axes[0].get_lines()]
+    against = [r for r in rows if "red-cell map" in r.statement]
+    assert len(against) == 1 and against[0].verdict == "not checked"
+    assert "no red-cell map" in against[0].note and "no_red_cell_map.json" in against[0].note
+    vs = [r for r in rows if "vesicle map" in r.statement or "RBC theory when" in r.statement]
+    assert len(vs) == 2 and {r.verdict for r in vs} <= {"agree", "disagree"}
+
+
+def test_the_rbc_theory_is_solved_once_and_read_from_the_cache_afterwards(tmp_path,
+                                                                          monkeypatch):
+    """The real sweep (two ratios near λc: a few seconds) by the lubrication red cell at
+    Ca_B = 50 with the default cell's Ca_S; a second context on the same folder solves
+    nothing and gives the same statements."""
+    import lubrication.solve
+    monkeypatch.setattr(figures, "_rbc_sweep", REAL_RBC_SWEEP)
+    monkeypatch.setattr(figures, "RBC_RATIOS", (0.99, 0.98))
+    real, calls = lubrication.solve.sweep_lubrication, []
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs)
+        return real(*args, **kwargs)
+    monkeypatch.setattr(lubrication.solve, "sweep_lubrication", counted)
+    cell = figures.red_cell()
+    assert (round(cell["nu"], 3), round(cell["ca_s"], 3), round(cell["U_mm_s"], 2)) == \
+        (0.61, 0.216, 1.08)
+    fig, rows, cached = figures.figure_speed(figures.FigureContext(tmp_path))
+    assert len(calls) == 1 and not cached
+    assert calls[0]["ca_b"] == 50.0 and calls[0]["ca_s"] == pytest.approx(cell["ca_s"])
+    _, y = _line(fig, figures.RBC_LABEL)
+    assert np.all(np.isfinite(y)) and np.all((1.0 < y) & (y < 1.1))   # near λc: V/U → 1
+    fig2, rows2, cached2 = figures.figure_speed(figures.FigureContext(tmp_path))
+    assert len(calls) == 1 and cached2
+    assert rows2 == rows
+    np.testing.assert_array_equal(_line(fig2, figures.RBC_LABEL)[1], y)
+
+
+def test_velocity_statements_follow_the_stored_red_cell(tmp_path, monkeypatch):
+    """η_rel against flow rate from a stored BEM red cell: changes per doubling of U computed
+    here from the single-file law written out, (3/32)(R/R0)⁴ Δp⁺ H_T, not the module's; a
+    missing file makes both statements "not checked" naming it."""
+    R0, d = 2.78, 5.0
+    dps = {0.1: 40.0, 0.2: 30.0, 1.0: 20.0, 2.0: 19.5, 4.0: 19.2}    # U/d = 50 s⁻¹ at 0.25
+    rows = {f"red cell d=5 U={u:g}": {"U_mm_s": u, "diameter_um": d, "dp_plus_R0": v,
+                                       "success": True} for u, v in dps.items()}
+    rows["red cell d=5 U=8"] = {"U_mm_s": 8.0, "diameter_um": d, "success": False}
+    path = tmp_path / "rbc.json"
+    path.write_text(json.dumps({"parameters": {"R0_um": R0}, "rows": rows}))
+    monkeypatch.setattr(figures, "RBC_VELOCITY_DATA", path)
+    hi, lo = figures._velocity_rows()
+
+    def eta(u):
+        return 1.0 + 3.0 / 32.0 * (d / 2.0 / R0) ** 4 * dps[u] * 0.45
+    per = [(eta(b) / eta(a)) ** (1.0 / math.log2(b / a)) - 1.0
+           for a, b in ((1.0, 2.0), (2.0, 4.0))]
+    assert hi.verdict == "agree" and f"{100 * per[0]:+.1f} %" in hi.ours
+    assert f"{100 * (eta(1.0) / eta(0.2)) ** (1 / math.log2(5.0)) - 100:+.1f} %" in lo.note
+    assert lo.verdict == "agree" and lo.ours.endswith("in 2 of 2 pairs")
+    monkeypatch.setattr(figures, "RBC_VELOCITY_DATA", tmp_path / "missing.json")
+    assert all(r.verdict == "not checked" and "missing.json" in r.note
+               for r in figures._velocity_rows())

@@ -139,7 +139,8 @@ def test_solver_failure_is_reported_not_hidden(monkeypatch):
     def fail(*args):
         raise registry.SolverNotConverged("lubrication solver did not converge: test")
     monkeypatch.setattr(registry, "_lubrication_solution", fail)
-    e = estimate(diameter_um=2.9, solvers=("lubrication",), solution_map=False)
+    e = estimate(diameter_um=2.9, solvers=("lubrication",), solution_map=False,
+                 membrane="vesicle")
     assert e.converged is False and e.to_dict()["converged"] is False
     assert any("did not converge" in n for n in e.notes)
     # The closed forms still answer where they are valid (2.9 um: near-critical, delta = 0.02).
