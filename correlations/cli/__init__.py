@@ -376,7 +376,9 @@ def _add_cell_options(parser, where: str = "") -> None:
     d, default = RBC_DEFAULTS, DEFAULT_MEMBRANE
     parser.add_argument("--velocity-mm-s", type=float,
                         help=f"mean flow velocity U [mm/s], {_bounds('velocity_mm_s')} "
-                             f"(default {d['velocity_mm_s']:g}){where}")
+                             f"(default {d['velocity_mm_s']:g}; a red cell answered by the "
+                             f"red-cell map: within its velocities, 0.2 to 10 for the default "
+                             f"cell){where}")
     parser.add_argument("--shear-modulus-uN-m", type=float,
                         help=f"membrane shear modulus G_s of a red cell [uN/m], "
                              f"{_bounds('shear_modulus_un_m')} (default "
