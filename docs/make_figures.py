@@ -5,7 +5,8 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from correlations.estimate import estimate
-from correlations.plotting import plot_estimate, plot_relative_viscosity
+from correlations.plotting import (plot_estimate, plot_relative_viscosity,
+                                   plot_single_file_viscosity)
 from lubrication.plotting import plot_dp_plus_asymptotics, plot_speed_asymptotics
 
 OUT = Path(__file__).with_name("figures")
@@ -23,8 +24,12 @@ def main() -> None:
     ax.set_yscale("log")
     ax.figure.savefig(OUT / "viscosity_laws.png", dpi=110, bbox_inches="tight")
 
-    plot_estimate(estimate(diameter_um=3.0)).figure.savefig(OUT / "estimate_rbc_3um.png", dpi=110,
-                                                           bbox_inches="tight")
+    # the asymptotic laws drawn there are the vesicle's: the vesicle model of the cell
+    plot_estimate(estimate(diameter_um=3.0, membrane="vesicle")).figure.savefig(
+        OUT / "estimate_rbc_3um.png", dpi=110, bbox_inches="tight")
+
+    plot_single_file_viscosity(0.3).figure.savefig(OUT / "single_file_velocities.png", dpi=110,
+                                                   bbox_inches="tight")
 
 
 if __name__ == "__main__":

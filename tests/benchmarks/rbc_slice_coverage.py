@@ -7,17 +7,21 @@ into a temporary file) and queries it at every converged red-cell point of
 ν and λ/λc grid lines; their velocities 0.1-2 mm/s are on its Ca_B lines, 4 and 8 mm/s between
 them). For each quantity it prints how often |map − direct| ≤ the map's error bar (the target
 of the red-cell estimate: ≥ 90 % of ≥ 20 points) and the largest ratio |map − direct|/bar.
-Points where the map has no value (outside its box, a hole) are counted apart. Not a test.
+Points where the map has no value (outside its box, a hole) are counted apart. Then the share
+of ``--random N`` (default 4000) uniform random points of the map's box (log-uniform in Ca_B)
+where the map answers Δp⁺, overall and per ν interval. Not a test.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import random
 import tempfile
 from pathlib import Path
 
-from correlations.solution_map import load_map, pack_map, query_map
+from correlations.solution_map import load_map, pack_map, query_map, query_map_many
 
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = ROOT / "docs" / "data" / "rbc_slice_build"
@@ -28,6 +32,8 @@ QUANTITIES = ("V_over_U", "dp_plus_R0", "ell", "film_min")
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--map", type=Path, help="a packed red-cell map (default: pack the build)")
+    p.add_argument("--random", type=int, default=4000, metavar="N",
+                   help="random points of the box for the answered share (default 4000)")
     args = p.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         path = args.map or pack_map(BUILD, Path(tmp) / "rbc_slice_map.json")
@@ -59,7 +65,22 @@ def main(argv=None) -> int:
         share = s["covered"] / s["answered"] if s["answered"] else float("nan")
         print(f"{q:>12}: bar covers {s['covered']}/{s['answered']} ({share:.0%}), worst "
               f"|map - direct|/bar = {s['worst']:.2f}")
+    answered_share(m, args.random)
     return 0
+
+
+def answered_share(m, n: int, seed: int = 7) -> None:
+    """Print where map ``m`` answers Δp⁺ among ``n`` random points of its box."""
+    rng = random.Random(seed)
+    lo, hi = math.log(m.cas[0]), math.log(m.cas[-1])
+    pts = [(rng.uniform(m.nus[0], m.nus[-1]), rng.uniform(m.ratios[0], m.ratios[-1]),
+            math.exp(rng.uniform(lo, hi))) for _ in range(n)]
+    ok = [r.quantities["dp_plus_R0"].value is not None
+          for r in query_map_many(*zip(*pts), map=m, names=("V_over_U", "dp_plus_R0"))]
+    print(f"\nthe map answers at {sum(ok) / n:.1%} of {n} random points of its box")
+    for a, b in zip(m.nus, m.nus[1:]):
+        inside = [o for p, o in zip(pts, ok) if a <= p[0] < b]
+        print(f"  nu {a:g}-{b:g}: {sum(inside) / max(len(inside), 1):.1%}")
 
 
 if __name__ == "__main__":
