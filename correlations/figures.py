@@ -19,7 +19,7 @@ Sources of the numbers
       0.216), one cached continuation along λ/λc (:func:`_rbc_sweep`, which says why bending is
       kept: without it our model has no solution below λ/λc ≈ 0.91); beside it, dotted, the
       BEM red cell of the red-cell map (:data:`correlations.solution_map.RED_CELL_MAP`) when
-      that map answers, and our BEM red cell against velocity (:data:`RBC_VELOCITY_DATA`).
+      that map answers, and the same map against velocity (:func:`_velocity_rows`).
 
 Cache
     Every figure's data is one JSON file in ``<out>/cache``, named by the figure and a hash of
@@ -559,9 +559,10 @@ RBC_TOL = {"V_over_U": 0.02, "dp_plus_R0": 0.10, "eta_rel": 0.05, "per_doubling"
 RBC_LAM_AGREE = 1.4
 #: Shear rate U/d above which Secomb et al. (1986) find η_rel independent of flow rate [1/s].
 RBC_HIGH_SHEAR = 50.0
-#: Our BEM red cell against velocity (d = 4, 5, 6, 8 µm, U = 0.06–8 mm/s): the stored results
-#: of ``tests/benchmarks/rbc_shear_bem.py`` (docs/red-cell.md).
-RBC_VELOCITY_DATA = Path(__file__).resolve().parents[1] / "docs" / "data" / "rbc_shear_bem.json"
+#: Tubes [µm] and mean velocities [mm/s] at which the red-cell map is read for η_rel against
+#: flow rate (:func:`_velocity_rows`; Secomb et al.'s capillaries and flow rates).
+RBC_VELOCITY_TUBES_UM = (4.0, 5.0, 6.0, 8.0)
+RBC_VELOCITIES_MM_S = (0.2, 0.3, 0.5, 1.0, 2.0, 4.0, 8.0)
 #: Tube hematocrit of fig. Kt.
 H_T_KT = 0.45
 
@@ -1302,12 +1303,13 @@ def figure_tension(ctx):
 
 # --------------------------------------------------------------------------- fig. Kt
 
-def _velocity_rows() -> list[Statement]:
+def _velocity_rows(red_cell_map) -> list[Statement]:
     """Fig. Kt's "apparent viscosity is almost independent of flow rate at U/d > 50 s⁻¹ but
     increases with decreasing flow rate at lower shear rates" (Chen et al. 2020 after Secomb
-    et al. 1986), checked on our BEM red cell against velocity (:data:`RBC_VELOCITY_DATA`):
-    η_rel at H_T = 0.45 (Chen et al. single-file law, the cell's R0) between consecutive
-    converged velocities of one tube; "almost independent": every change per doubling of U,
+    et al. 1986), checked on our BEM red cell, the red-cell map at ``red_cell_map`` (the
+    default cell, :func:`red_cell`, in the tubes :data:`RBC_VELOCITY_TUBES_UM` at the velocities
+    :data:`RBC_VELOCITIES_MM_S`, Ca_B ∝ U): η_rel at H_T = 0.45 (Chen et al. single-file law,
+    the cell's R0) between consecutive velocities of one tube where the map answers; "almost independent": every change per doubling of U,
     (η_b/η_a)^(1/log2(U_b/U_a)) − 1, below :data:`RBC_TOL` ``per_doubling`` in size where the
     slower velocity has U/d > 50 s⁻¹; "increases": η_rel higher at the slower velocity of
     every pair whose slower velocity has U/d ≤ 50 s⁻¹."""
@@ -1316,16 +1318,25 @@ def _velocity_rows() -> list[Statement]:
     lo_text = ("η_rel increases with decreasing flow rate at lower shear rates (U/d ≤ "
                f"{RBC_HIGH_SHEAR:g} s⁻¹, our BEM red cell)")
     tol = RBC_TOL["per_doubling"]
+    cell = red_cell()
+    R0, lam_c = cell["R0_um"], float(critical_confinement(cell["nu"]))
     try:
-        stored = read_json(RBC_VELOCITY_DATA, name="data", what="stored BEM red-cell results")
-        R0 = float(stored["parameters"]["R0_um"])
-        cells = [r for k, r in stored["rows"].items() if k.startswith("red cell")
-                 and r["success"]]
-    except (UnreadableFile, KeyError, TypeError, AttributeError, ValueError) as exc:
-        why = f"no stored BEM red cell against velocity ({exc})"
-        return [Statement("viscosity", hi_text, "almost independent", "—", f"< {tol:g} per "
-                          "doubling", "not checked", why),
+        m = load_map(red_cell_map)
+        if m.membrane is None or abs(m.membrane["shear_ratio"] / cell["shear_ratio"] - 1) > 1e-3:
+            raise InvalidParameterError("map", str(red_cell_map), "the default red cell's map")
+    except (UnreadableFile, InvalidParameterError) as exc:
+        why = f"no red-cell map of the default cell ({exc})"
+        return [Statement("viscosity", hi_text, "almost independent", "—", f"< {100 * tol:g} % "
+                          "per doubling", "not checked", why),
                 Statement("viscosity", lo_text, "increases", "—", "sign", "not checked", why)]
+    cells = []
+    for d in RBC_VELOCITY_TUBES_UM:
+        for u in RBC_VELOCITIES_MM_S:
+            ca_b = CA_B * u / cell["U_mm_s"]
+            if m.cas[0] <= m.node_ca_b(ca_b) <= m.cas[-1]:
+                dp = query_map(cell["nu"], 2.0 * R0 / d / lam_c, ca_b, map=m)["dp_plus_R0"]
+                if dp is not None:
+                    cells.append({"diameter_um": d, "U_mm_s": u, "dp_plus_R0": dp})
     hi, lo = [], []
     for d in sorted({r["diameter_um"] for r in cells}):
         line = sorted((r for r in cells if r["diameter_um"] == d), key=lambda r: r["U_mm_s"])
@@ -1351,25 +1362,26 @@ def _velocity_rows() -> list[Statement]:
                               f"largest change {100 * worst[5]:+.1f} % per doubling of U",
                               f"< {100 * tol:g} % per doubling", _verdict(abs(worst[5]) < tol),
                               f"{show(worst)}; per doubling, U in mm/s: {brief(hi)}; H_T = "
-                              f"{H_T_KT:g}, {RBC_VELOCITY_DATA.name}"))
+                              f"{H_T_KT:g}, red-cell map"))
     else:
         rows.append(Statement("viscosity", hi_text, "almost independent", "—", f"< {100 * tol:g}"
-                              " % per doubling", "not checked", "no two converged velocities "
-                              f"above U/d = {RBC_HIGH_SHEAR:g} s⁻¹ in one tube"))
+                              " % per doubling", "not checked", "no two velocities above U/d "
+                              f"= {RBC_HIGH_SHEAR:g} s⁻¹ in one tube where the red-cell map "
+                              "answers"))
     if lo:
         up = [p for p in lo if p[3] > p[4]]
         rows.append(Statement("viscosity", lo_text, "increases", f"higher at the slower "
                               f"velocity in {len(up)} of {len(lo)} pairs", "every pair",
                               _verdict(len(up) == len(lo)), f"per doubling, U in mm/s: "
-                              f"{brief(lo)}; H_T = {H_T_KT:g}, {RBC_VELOCITY_DATA.name}"))
+                              f"{brief(lo)}; H_T = {H_T_KT:g}, red-cell map"))
     else:
         rows.append(Statement("viscosity", lo_text, "increases", "—", "sign", "not checked",
-                              "no converged pair with U/d ≤ "
-                              f"{RBC_HIGH_SHEAR:g} s⁻¹"))
+                              f"no pair with U/d ≤ {RBC_HIGH_SHEAR:g} s⁻¹ where the red-cell "
+                              "map answers"))
     return rows
 
 
-def _viscosity_rbc_rows(data) -> list[Statement]:
+def _viscosity_rbc_rows(data, red_cell_map) -> list[Statement]:
     """Fig. Kt of Chen et al. (2020): η_rel of the BEM vesicle "in excellent agreement with
     the lubrication theory when d ≤ 4 µm", and "when d > 5 µm the parallel-flow approximation
     of Secomb et al. yields relatively higher η_rel" (at every d > 5 µm where both have a
@@ -1401,7 +1413,7 @@ def _viscosity_rbc_rows(data) -> list[Statement]:
                                   for i, a, b in ends)
                               + (f"; for d ≥ {_fmt(min(neg), 3)} µm the RBC theory's Δp⁺ < 0: "
                                  "no η_rel" if neg else "")))
-    return rows + _velocity_rows()
+    return rows + _velocity_rows(red_cell_map)
 
 
 def figure_viscosity(ctx):
@@ -1493,7 +1505,7 @@ def figure_viscosity(ctx):
                   "reasonable", "—", "—", "not checked", "no number stated; both curves are "
                   "drawn"),
     ]
-    return fig, rows + _viscosity_rbc_rows(rbc), cached
+    return fig, rows + _viscosity_rbc_rows(rbc, ctx.red_cell_map_path), cached
 
 
 #: name -> (caption, function); the order of a full run (cheap first, BEM solves last).
