@@ -657,7 +657,7 @@ def _rbc_data(ctx) -> tuple[dict, bool]:
     digest = hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else None
     maps, c2 = ctx.cached("rbc_maps", params, lambda: _rbc_map_values(ctx, cell),
                           inputs={"map_sha256": ctx.fingerprint["map_sha256"],
-                                  "red_cell_map": str(path), "red_cell_map_sha256": digest})
+                                  "red_cell_map": path.name, "red_cell_map_sha256": digest})
     if not c1:
         ctx.progress(f"  RBC theory: {sum(rbc['success'])} of {len(RBC_RATIOS)} λ/λc converged "
                      f"in {rbc['seconds']:.0f} s")
