@@ -52,7 +52,8 @@ from .registry import (BEM_DEFAULT_CA_B, LUBRICATION_DEFAULT_CA_B, MAP, MAP_DEFA
 from .solution_map import RED_CELL_MAP, SolutionMap, load_map
 
 __all__ = ["RBC_DEFAULTS", "PHYSICAL_BOUNDS", "RUPTURE_TENSION_MN_M", "UNITS", "Quantity",
-           "Estimate", "estimate", "estimate_dimensionless", "physical_scales"]
+           "Estimate", "estimate", "estimate_dimensionless", "physical_scales",
+           "SingleFileViscosity", "single_file_viscosity"]
 
 RBC_DEFAULTS = {
     "volume_fl": 90.0,            # Evans & Fung 1972 (mean corpuscular volume ~90 fL)
@@ -850,9 +851,6 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
 
 
 # --------------------------------------------------------------------------- single-file viscosity
-
-__all__ += ["SingleFileViscosity", "single_file_viscosity"]
-
 
 @dataclass(frozen=True)
 class SingleFileViscosity:
