@@ -66,6 +66,7 @@ from .estimate import RBC_DEFAULTS, physical_scales
 from .film import C0_CHEN2020, film_from_capillary_chen2020
 from .files import UnreadableFile, read_json
 from .plotting import plot_relative_viscosity
+from .registry import membrane_mismatch
 from .pressure import (dp_plus_film_chen2020, dp_plus_small_sphere_coupling,
                        dp_plus_speed_fit_chen2020)
 from .shape import transition_reduced_volume_chen2020
@@ -631,19 +632,20 @@ def _rbc_map_values(ctx, cell) -> dict:
     def along(m):
         rows = [query_map(cell["nu"], r, cell["ca_b"], map=m) for r in RBC_RATIOS]
         return {q: [row[q] for row in rows] for q in ("V_over_U", "dp_plus_R0")}
-    out = {"vesicle": along(ctx.map), "bem": None, "bem_reason": ""}
+    m, why = _default_cell_map(ctx.red_cell_map_path, cell)
+    return {"vesicle": along(ctx.map), "bem": None if m is None else along(m), "bem_reason": why}
+
+
+def _default_cell_map(path, cell) -> tuple:
+    """``(map, "")`` for the red-cell map at ``path`` if it answers for ``cell`` (its membrane
+    and shear ratio β, the estimate's rule :func:`correlations.registry.membrane_mismatch`),
+    else ``(None, reason)``."""
     try:
-        m = load_map(ctx.red_cell_map_path)
+        m = load_map(path)
     except (UnreadableFile, InvalidParameterError) as exc:
-        out["bem_reason"] = f"no red-cell map: {exc}"
-        return out
-    beta = (m.membrane or {}).get("shear_ratio")
-    if beta is None or abs(beta / cell["shear_ratio"] - 1.0) > 1e-3:
-        out["bem_reason"] = (f"the red-cell map {ctx.red_cell_map_path.name} has β = "
-                             f"{_fmt(beta)}, not the default cell's {_fmt(cell['shear_ratio'])}")
-        return out
-    out["bem"] = along(m)
-    return out
+        return None, f"no red-cell map: {exc}"
+    why = membrane_mismatch(m, {"membrane": "red-cell", "shear_ratio": cell["shear_ratio"]})
+    return (None, f"{Path(path).name}: {why}") if why else (m, "")
 
 
 def _rbc_data(ctx) -> tuple[dict, bool]:
@@ -1320,12 +1322,9 @@ def _velocity_rows(red_cell_map) -> list[Statement]:
     tol = RBC_TOL["per_doubling"]
     cell = red_cell()
     R0, lam_c = cell["R0_um"], float(critical_confinement(cell["nu"]))
-    try:
-        m = load_map(red_cell_map)
-        if m.membrane is None or abs(m.membrane["shear_ratio"] / cell["shear_ratio"] - 1) > 1e-3:
-            raise InvalidParameterError("map", str(red_cell_map), "the default red cell's map")
-    except (UnreadableFile, InvalidParameterError) as exc:
-        why = f"no red-cell map of the default cell ({exc})"
+    m, why = _default_cell_map(red_cell_map, cell)
+    if m is None:
+        why = f"no red-cell map of the default cell ({why})"
         return [Statement("viscosity", hi_text, "almost independent", "—", f"< {100 * tol:g} % "
                           "per doubling", "not checked", why),
                 Statement("viscosity", lo_text, "increases", "—", "sign", "not checked", why)]
