@@ -502,19 +502,29 @@ def _default_cell() -> tuple:
                   f"{d['volume_fl']:g} fL, the default red cell")
 
 
+def solvers_ca_s_range(solvers: tuple) -> tuple[float, float]:
+    """The Ca_S every enabled solver takes: :data:`lubrication.solve.CA_S_RANGE`,
+    :data:`bem.vesicle.CA_S_RANGE` (the BEM reaches lower Ca_S by continuation along the
+    velocity), intersected."""
+    from bem.vesicle.inputs import CA_S_RANGE as BEM   # lazy: scipy
+    from lubrication.solve import CA_S_RANGE as LUBRICATION
+    ranges = [{"lubrication": LUBRICATION, "bem": BEM}[s] for s in solvers if s != MAP]
+    return (max((r[0] for r in ranges), default=0.0),
+            min((r[1] for r in ranges), default=math.inf))
+
+
 def _check_red_cell_solve(nu: float, ca_s: float, solvers: tuple, ca_s_name: str, nu_name: str,
                           ca_s_range=None) -> None:
     """With a solver enabled, a red cell the solvers can take, checked before any work: Ca_S
-    within :data:`lubrication.solve.CA_S_RANGE` (``ca_s_range``: the same range expressed in
-    the caller's input, ``(value, lo, hi, reason)``) and nu where the stress-free Evans–Fung
+    within :func:`solvers_ca_s_range` (``ca_s_range(lo, hi)`` -> ``(value, lo, hi, reason)``:
+    the same range expressed in the caller's input) and nu where the stress-free Evans–Fung
     disc exists (:func:`lubrication.membrane.reference_nu_range`)."""
     if not solvers:
         return
     from lubrication.membrane import reference_nu_range   # lazy: scipy, numba
-    from lubrication.solve import CA_S_RANGE     # lazy: scipy
-    lo, hi = CA_S_RANGE
+    lo, hi = solvers_ca_s_range(solvers)
     if not lo <= ca_s <= hi:
-        value, vlo, vhi, reason = ca_s_range or (ca_s, lo, hi, "")
+        value, vlo, vhi, reason = ca_s_range(lo, hi) if ca_s_range else (ca_s, lo, hi, "")
         raise InvalidParameterError(
             ca_s_name, value, f"{vlo:.4g} to {vhi:.4g}",
             f"the shear capillary number Ca_S = {ca_s:.4g} is outside the solvers' range "
@@ -805,8 +815,8 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
         ca_s, beta = scale["ca_s"], scale["shear_ratio"]
         # the velocities of the solvers' Ca_S range for this cell: U = Ca_S G_s/eta [mm/s]
         u_of = G_s * 1e-6 / eta * 1e3
-        _check_red_cell_solve(nu, ca_s, solvers, "velocity_mm_s", "area_um2", (
-            U * 1e3, 1e-2 * u_of, 1e4 * u_of,
+        _check_red_cell_solve(nu, ca_s, solvers, "velocity_mm_s", "area_um2", lambda lo, hi: (
+            U * 1e3, lo * u_of, hi * u_of,
             f" for G_s = {G_s:g} uN/m and eta = {eta * 1e3:g} mPa s"))
         cell = {"membrane": "red-cell", "ca_s": ca_s, "shear_ratio": beta,
                 "default_cell": _default_cell()}

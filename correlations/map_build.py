@@ -217,7 +217,7 @@ def point_options(options: dict, ca_b: float) -> dict:
     if "ca_s" in out:
         raise InvalidParameterError(SHEAR_RATIO, beta, "either shear_ratio or ca_s",
                                     "shear_ratio sets each point's ca_s = ca_b/shear_ratio")
-    from lubrication.solve import CA_S_RANGE  # lazy: scipy off the build's start-up
+    from bem.vesicle.inputs import CA_S_RANGE  # lazy: scipy off the build's start-up
     lo, hi = CA_S_RANGE
     check_range(SHEAR_RATIO, beta, ca_b / hi, ca_b / lo,
                 reason=f"G_s R0^2/kappa = Ca_B/Ca_S of the cell; at ca_b={ca_b:g} the solver's "
@@ -323,6 +323,7 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     of the next point or None)."""
     from bem import vesicle  # lazy: scipy and the BEM off the build's input checks
     from bem.shape import SpectralCurve  # lazy: with bem.vesicle
+    from bem.vesicle.pipeline import VELOCITY_FIRST  # lazy: with bem.vesicle
     options = point_options(options, ca_b)
 
     def neighbour():
@@ -332,8 +333,12 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
 
     starts = [("own", lambda: None)]
     if warm is not None:
+        # a slow red cell: the solver's own continuation along the velocity first (the
+        # neighbour at the same velocity may sit on a compressed, self-equilibrated state)
+        first = (lam_ratio <= vesicle.NEAR_CRITICAL
+                 and not options.get("ca_s", math.inf) < VELOCITY_FIRST)
         label = f"neighbour (nu={warm['nu']:g}, lam/lam_c={warm['lam_ratio']:g})"
-        starts.insert(0 if lam_ratio <= vesicle.NEAR_CRITICAL else 1, (label, neighbour))
+        starts.insert(0 if first else 1, (label, neighbour))
     deadline = None if max_time is None else time.monotonic() + max_time
     failures, found, bie, res = [], [], 0, None
     for label, make_initial in starts:

@@ -269,11 +269,13 @@ def check_inputs(nu, lam=None, lam_ratio=None, ca_b=math.inf, *, names=None):
     return nu, lam, lam_c, ca_b
 
 
-def check_shear_inputs(nu, ca_s=None, reference="biconcave", *, names=None):
+def check_shear_inputs(nu, ca_s=None, reference="biconcave", *, names=None,
+                       ca_s_range=CA_S_RANGE):
     """Checked ``(ca_s, reference)`` of a red-cell membrane, before any work.
 
     ``ca_s`` None or ``math.inf``: no shear elasticity (a vesicle), returned as ``math.inf``;
-    else within :data:`CA_S_RANGE`. ``reference`` one of
+    else within ``ca_s_range`` (default :data:`CA_S_RANGE`, this solver's; the BEM passes
+    its own, :data:`bem.vesicle.CA_S_RANGE`). ``reference`` one of
     :data:`lubrication.membrane.REFERENCE_SHAPES`; with a finite ``ca_s`` the reference shape
     must exist at ``nu`` (:func:`lubrication.membrane.reference_nu_range`). ``names`` as in
     :func:`check_inputs`.
@@ -288,7 +290,7 @@ def check_shear_inputs(nu, ca_s=None, reference="biconcave", *, names=None):
     if ca_s is None or (isinstance(ca_s, (int, float, np.integer, np.floating))
                         and ca_s == math.inf):
         return math.inf, reference
-    ca_s = float(check_range(n["ca_s"], ca_s, *CA_S_RANGE,
+    ca_s = float(check_range(n["ca_s"], ca_s, *ca_s_range,
                              reason=f"shear capillary number eta U/G_s; {n['ca_s']}=None (or inf) "
                                     "for a vesicle (no shear elasticity)"))
     reference_shape(reference, nu)          # raises if the family has no member at nu

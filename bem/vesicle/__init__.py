@@ -35,6 +35,7 @@ docs/vesicle-solver.md.
 from .inputs import (
     CA_B_MAX,
     CA_B_MIN,
+    CA_S_RANGE,
     MAX_MODES,
     VesicleInputs,
     check_vesicle_case,
@@ -52,7 +53,7 @@ from .seeds import (
     spheroid_seed,
 )
 
-__all__ = ["CA_B_MAX", "CA_B_MIN", "MAX_MODES", "NEAR_CRITICAL", "WALL_REFINEMENT",
-           "VesicleInputs", "VesicleOperator", "capsule_seed", "check_vesicle_case",
+__all__ = ["CA_B_MAX", "CA_B_MIN", "CA_S_RANGE", "MAX_MODES", "NEAR_CRITICAL",
+           "WALL_REFINEMENT", "VesicleInputs", "VesicleOperator", "capsule_seed", "check_vesicle_case",
            "check_vesicle_inputs", "fit_lubrication", "level_function", "lubrication_seed",
            "seed_from_lubrication", "solve_vesicle", "spheroid_seed", "vesicle_discretisation"]

@@ -35,13 +35,19 @@ from lubrication.solve import check_shear_inputs
 
 from ..drop import mode_count as _drop_mode_count  # one check, the vesicle's MAX_MODES
 
-__all__ = ["CA_B_MAX", "CA_B_MIN", "MAX_MODES", "VesicleInputs", "check_vesicle_case",
-           "check_vesicle_inputs", "mode_count"]
+__all__ = ["CA_B_MAX", "CA_B_MIN", "CA_S_RANGE", "MAX_MODES", "VesicleInputs",
+           "check_vesicle_case", "check_vesicle_inputs", "mode_count"]
 
 #: most shape modes of one level (resource envelope, module docstring)
 MAX_MODES = 96
 #: bending capillary numbers accepted (module docstring)
 CA_B_MIN, CA_B_MAX = 1e-2, 1e5
+#: shear capillary numbers ηU/G_s of a red cell accepted: from 1e-3 (0.005 mm/s for the
+#: default cell, G_s = 6 µN/m in plasma), reached by continuation along the velocity
+#: (:mod:`bem.vesicle.pipeline`; converged at (0.6, 0.3 λc, Ca_B 0.464, Ca_S 0.002) in 7 s), to
+#: 1e4, above which the red cell is the vesicle within the tolerances (as for the lubrication
+#: solver, :data:`lubrication.solve.CA_S_RANGE`)
+CA_S_RANGE = (1e-3, 1e4)
 
 
 @dataclass(frozen=True)
@@ -157,7 +163,7 @@ def check_vesicle_inputs(nu, lam=None, *, lam_ratio=None, ca_b=50.0, n_modes=Non
     max_iter = int(check_range("max_iter", max_iter, 1, 1000))
     if max_time is not None:
         Deadline(max_time)                               # 0 < max_time < inf
-    ca_s, reference = check_shear_inputs(nu, ca_s, reference)
+    ca_s, reference = check_shear_inputs(nu, ca_s, reference, ca_s_range=CA_S_RANGE)
     return VesicleInputs(nu=nu, lam=lam, lam_c=lam_c, ca_b=ca_b, n_modes=n_modes, tol=tol,
                          tension_tol=tension_tol, residual_tol=residual_tol,
                          max_modes=max_modes, rung_modes=rung_modes,

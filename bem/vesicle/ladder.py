@@ -57,10 +57,22 @@ uniform arc length.
 
 The result is the last level's, with every problem named and the leading one as its status
 (:data:`lubrication.results.PRECEDENCE`): a self-intersecting membrane or a film closing below
-:data:`FILM_CLOSED` = 1e-3 R (NO_STEADY_STATE), an estimated error above the tolerance
+:data:`FILM_CLOSED` = 1e-3 R or, for a red cell, a membrane compressed everywhere
+(NO_STEADY_STATE: below), an estimated error above the tolerance
 (UNRESOLVED), a steady residual above ``residual_tol`` or Levenberg–Marquardt failing on the
 last level (NOT_CONVERGED), the time limit (TIME_LIMIT), no level able to start
 (REJECTED_START).
+
+A red cell whose largest isotropic tension γ_max is not positive has, with the deviatoric
+tensions ±G_s f of its shear law, a principal tension γ − G_s|f| < 0 everywhere: a membrane
+compressed everywhere, balanced by its own elastic loads, which a membrane of small bending
+stiffness relieves by buckling (not representable here), not a state the flow drives. Such
+states are steady solutions of the equations, reached at low Ca_S from a stored vesicle shape
+far from the cell's own: on the red-cell slice (default cell, docs/data/rbc_slice_build) they
+had γ_max −21 to −175 ηU, a wavy elongated shape and a V/U independent of the velocity (1.930
+at (0.65, 0.2 λc) from 0.06 to 0.5 mm/s), while the same cell continued down in velocity from
+1 mm/s has γ_max +1.3 to +1.5 ηU and V/U falling with velocity (1.687, 1.674, 1.664, 1.660 at
+1, 0.5, 0.2, 0.1 mm/s); every other converged point of the slice has γ_max ≥ +1 ηU.
 """
 
 from __future__ import annotations
@@ -732,6 +744,11 @@ def _verdict(case: VesicleInputs, ladder: _Ladder, prof: dict, err: dict) -> tup
         found.append(Status.NO_STEADY_STATE)
     if fine["film_min"] < FILM_CLOSED:
         problems.append(f"the film closes (min gap {fine['film_min']:.2e} R)")
+        found.append(Status.NO_STEADY_STATE)
+    if case.shear is not None and not fine["tension_max"] > 0.0:
+        problems.append(f"the membrane is compressed everywhere (largest isotropic tension "
+                        f"{fine['tension_max']:.3g} ηU): a self-equilibrated elastic state, "
+                        f"not the flow-driven one")
         found.append(Status.NO_STEADY_STATE)
     bad = [k for k in ESTIMATED_OUTPUTS
            if not err[k] <= _tolerance(k, tol, tension_tol) * abs(fine[k])]

@@ -35,12 +35,17 @@ converges to that class the point is bistable, and the result says so (``other_b
 message). ``branch`` asks for one class (only stored shapes of that class are tried, and a
 solve ending in the other class does not count); ``seed_bank=False`` tries the own seed only.
 
-A red cell (``ca_s`` finite: the membrane's shear elasticity, :mod:`bem.shear`) is solved from
-the same starts (the stored shapes are vesicles'); where none converges, the vesicle is solved
-from them and continued in Ca_S down to the case's (:func:`_shear_continuation`), its last
-solve allowed up to MAX_MODES like a stored shape's. Neither the time relaxation (its
-time-dependent solver has no shear elasticity) nor the probe for a second branch is run for a
-red cell.
+A red cell (``ca_s`` finite: the membrane's shear elasticity, :mod:`bem.shear`) is also reached
+by continuation along its velocity (:func:`_velocity_continuation`): the same cell faster, at
+Ca_S = :data:`SHEAR_START` where shear is a modest correction and the starts (the stored shapes
+are vesicles') converge, then slowed down step by step at fixed β = Ca_B/Ca_S to the case's
+velocity, the last solve allowed up to MAX_MODES like a stored shape's. It is the physical path
+(a cell slowing down), and below :data:`VELOCITY_FIRST` it is tried before the direct starts:
+there the stored vesicle shapes lie far from the cell's own and end in compressed,
+self-equilibrated states (:mod:`bem.vesicle.ladder`) or stall (on the red-cell slice at
+0.1 mm/s, 20 of 40 points converged from them; continued from 0.2 mm/s the same points
+converge at 32 modes in about a second). Neither the time relaxation (its time-dependent solver
+has no shear elasticity) nor the probe for a second branch is run for a red cell.
 """
 
 from __future__ import annotations
@@ -59,7 +64,7 @@ from ..results import VesicleResult
 from ..seed_bank import SHAPE_CLASSES, load_seed_bank
 from ..shape import fit_curve
 from ..threads import single_threaded_blas
-from .inputs import MAX_MODES, VesicleInputs, check_vesicle_inputs
+from .inputs import CA_B_MAX, MAX_MODES, VesicleInputs, check_vesicle_inputs
 from .ladder import (
     RUNG_RESIDUAL_TOL,
     RUNG_TENSION_TOL,
@@ -102,12 +107,20 @@ RELAX_TIME = 20.0
 #: below this fraction of its largest value over the second half of the run (it decays, as
 #: towards the parachute of (0.6449, 0.281 λc, 43.9): 1.7e-1 -> 9.2e-2 over 20 R/U).
 RELAX_APPROACH = 0.8
-#: Continuation of a red cell in Ca_S = ηU/G_s when no start reaches it directly
-#: (:func:`_shear_continuation`): the first step and the factor between steps. At Ca_S = 1 the
-#: shear tensions G_s f are a fraction of the flow's: at (0.61, 0.7 λc, Ca_B 50, Ca_S 0.2) the
-#: tension difference f reaches 2.5 (λ_φ² = 0.19) against an isotropic tension of about 36 ηU.
+#: Continuation of a red cell along its velocity (:func:`_velocity_continuation`): the Ca_S of
+#: its first rung (a cell of Ca_S at least this is solved from the vesicle at its Ca_B instead)
+#: and the factor between rungs. At Ca_S = 1 the shear tensions G_s f are a fraction of the
+#: flow's: at (0.61, 0.7 λc, Ca_B 50, Ca_S 0.2) the tension difference f reaches 2.5
+#: (λ_φ² = 0.19) against an isotropic tension of about 36 ηU.
 SHEAR_START = 1.0
 SHEAR_FACTOR = 3.0
+#: A rung that fails is retried at the geometric middle of its step, at most this many times
+#: in a row (no measurement recorded).
+SHEAR_BISECTIONS = 3
+#: Ca_S below which the continuation along the velocity is tried before the direct starts:
+#: stored vesicle shapes ended in compressed states at Ca_S 0.02-0.1 on the red-cell slice
+#: (module docstring); at Ca_S 0.2 and above none did.
+VELOCITY_FIRST = 0.15
 
 
 @dataclasses.dataclass(frozen=True)
@@ -229,39 +242,54 @@ def _first_converged(starts: list[Start], solve, branch: str | None, deadline) -
     return None, "", failed
 
 
-def _shear_continuation(case: VesicleInputs, starts: list[Start], solve, branch: str | None,
-                        deadline) -> tuple:
-    """A red cell that no start reached directly: the vesicle (no shear elasticity) from the same
-    starts, then continuation in Ca_S from :data:`SHEAR_START` down to the case's by factors of
-    :data:`SHEAR_FACTOR`, each step a coarse ``rung_modes`` pair at the rungs' loose
-    tolerances from the one before, the last refined by the ladder. Returns (result or None,
-    the label of its start, the reason it failed)."""
-    res, label, _ = _first_converged([dataclasses.replace(s, inputs=dataclasses.replace(
-        s.inputs, ca_s=math.inf)) for s in starts], solve, branch, deadline)
+def _velocity_continuation(case: VesicleInputs, seed_bank: bool, solve, branch: str | None,
+                           deadline) -> tuple:
+    """A red cell reached along its velocity: its first rung solved from the starts of
+    :func:`_starts` at the rung, then rungs at Ca_S / :data:`SHEAR_FACTOR` each, Ca_B in proportion
+    (the same cell slower), each a coarse ``rung_modes`` pair at the rungs' loose tolerances
+    from the one before (a failed rung is retried at the middle of its step,
+    :data:`SHEAR_BISECTIONS` times at most), the last refined by the ladder at the case. The
+    first rung is the cell at Ca_S = :data:`SHEAR_START` if the case is slower (its Ca_B
+    capped at CA_B_MAX), else the vesicle at the case's Ca_B. Returns (result or None, the label
+    of its start, the reason it failed)."""
+    if case.ca_s < SHEAR_START:
+        k = min(SHEAR_START / case.ca_s, CA_B_MAX / case.ca_b)
+        first, what = dataclasses.replace(case, ca_b=case.ca_b * k, ca_s=case.ca_s * k), \
+            "the cell faster"
+    else:
+        k, first, what = 1.0, dataclasses.replace(case, ca_s=math.inf), "the vesicle"
+    res, label, failed = _first_converged(_starts(first, None, branch, seed_bank), solve,
+                                          branch, deadline)
     if res is None:
-        return None, "", "continuation in Ca_S: the vesicle has no steady state from the starts"
-    steps = []
-    q = SHEAR_START
-    while q > case.ca_s * SHEAR_FACTOR ** 0.5:
-        steps.append(q)
-        q /= SHEAR_FACTOR
+        return None, "", (f"continuation along the velocity: {what} (Ca_B {first.ca_b:.4g}, "
+                          f"Ca_S {first.ca_s:.3g}) has no steady state from the starts ("
+                          + "; ".join(f"{lab}: {why}" for lab, why, _ in failed) + ")")
     rung = dataclasses.replace(case, n_modes=case.rung_modes, max_modes=None, tol=RUNG_TOL,
                                tension_tol=RUNG_TENSION_TOL, residual_tol=RUNG_RESIDUAL_TOL)
-    for q in steps:
+    path, at, factor, misses = [k], k, SHEAR_FACTOR, 0
+    while at / factor > 1.0 + 1e-12:       # the last step, to the case, is the final solve
         if deadline.expired():
-            return None, "", f"continuation in Ca_S: {deadline.message()} at Ca_S = {q:.3g}"
-        nxt = solve(res, dataclasses.replace(rung, ca_s=q))
+            return None, "", (f"continuation along the velocity: {deadline.message()} at "
+                              f"Ca_S = {case.ca_s * at:.3g}")
+        nxt_at = at / factor
+        nxt = solve(res, dataclasses.replace(rung, ca_b=case.ca_b * nxt_at,
+                                             ca_s=case.ca_s * nxt_at))
         if nxt.modes.size == 0 or nxt.status is Status.NO_STEADY_STATE:
-            return None, "", f"continuation in Ca_S failed at Ca_S = {q:.3g}: {nxt.message}"
-        res = nxt
+            if misses == SHEAR_BISECTIONS:
+                return None, "", (f"continuation along the velocity failed at Ca_S = "
+                                  f"{case.ca_s * nxt_at:.3g}: {nxt.message}")
+            factor, misses = factor ** 0.5, misses + 1
+            continue
+        res, at, factor, misses = nxt, nxt_at, SHEAR_FACTOR, 0
+        path.append(at)
     # the continued shape is on a steady branch: as for a stored shape, an estimate still above
     # the tolerance at the default cap is resolution, so the ladder may climb to MAX_MODES
     final = solve(res, dataclasses.replace(case, max_modes=MAX_MODES)
                   if case.max_modes is None and case.n_modes is None else case)
-    path = ", ".join(f"{q:.3g}" for q in steps)
+    rungs = ", ".join(f"{case.ca_s * a:.3g}" for a in path)
     if final.success and branch in (None, final.shape_class):
-        return final, f"continuation in Ca_S ({path}) from the vesicle of {label}", ""
-    return None, "", f"continuation in Ca_S ({path}) from the vesicle: {final.message}"
+        return final, f"continuation along the velocity (Ca_S {rungs}) from {what} of {label}", ""
+    return None, "", f"continuation along the velocity (Ca_S {rungs}): {final.message}"
 
 
 def _by_residual(res: VesicleResult) -> float:
@@ -404,10 +432,11 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     ca_s : float, optional
         Shear capillary number ηU/G_s of a red-cell membrane (:mod:`bem.shear`; the spectrin
         network's in-plane shear elasticity, Evans 1973, about 0.2 at 1 mm/s for
-        G_s = 6 µN/m): CA_S_RANGE = 1e-2 <= ca_s <= 1e4 of :mod:`lubrication.solve`. Default
-        None: a vesicle (no shear elasticity). A red cell is solved from the same starts; if
-        none converges, from the vesicle by continuation in Ca_S (:func:`_shear_continuation`);
-        neither the time relaxation nor the probe for a second branch is run for it.
+        G_s = 6 µN/m): :data:`~bem.vesicle.CA_S_RANGE` = 1e-3 <= ca_s <= 1e4. Default
+        None: a vesicle (no shear elasticity). A red cell is solved from the same starts and by
+        continuation along its velocity (:func:`_velocity_continuation`; first below
+        Ca_S = VELOCITY_FIRST, else where no start converges); neither the time relaxation
+        nor the probe for a second branch is run for it.
     reference : {"biconcave", "spheroid"}
         Stress-free shape of a red-cell membrane (:func:`lubrication.membrane.reference_shape`;
         the biconcave disc needs nu <= 0.743).
@@ -450,10 +479,18 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         return dataclasses.replace(res, timings=timings, **changes)
 
     starts = _starts(case, initial, branch, seed_bank)
-    res, label, failed = _first_converged(starts, solve, branch, deadline)
-    failures = [f"{lab}: {why}" for lab, why, _ in failed]
-    if res is None and red_cell and initial is None and not deadline.expired():
-        res, label, why = _shear_continuation(case, starts, solve, branch, deadline)
+    res, failures, failed = None, [], []
+    along = red_cell and initial is None
+    if along and case.ca_s < VELOCITY_FIRST:
+        res, label, why = _velocity_continuation(case, seed_bank, solve, branch, deadline)
+        along = False
+        if res is None:
+            failures.append(why)
+    if res is None:
+        res, label, failed = _first_converged(starts, solve, branch, deadline)
+        failures += [f"{lab}: {why}" for lab, why, _ in failed]
+    if res is None and along and not deadline.expired():
+        res, label, why = _velocity_continuation(case, seed_bank, solve, branch, deadline)
         if res is None:
             failures.append(why)
     if res is not None:

@@ -3,7 +3,7 @@
 The estimate's default red cell (:data:`correlations.estimate.RBC_DEFAULTS`: 90 fL, 135 µm²,
 plasma 1.2 mPa s, bending modulus 2e-19 J) with the shear modulus G_s = 6 µN/m (Hochmuth &
 Waugh 1987) and the Evans-Fung disc as stress-free shape: BEM points on ν 0.55-0.7, λ/λc
-0.2-0.95 and the Ca_B of U = 0.06-10 mm/s of that cell, all with the build option
+0.2-0.95 and the Ca_B of U = 0.01-10 mm/s of that cell, all with the build option
 ``shear_ratio`` β = G_s R0²/κ = Ca_B/Ca_S (:data:`correlations.solution_map.SHEAR_RATIO`), so
 that each Ca_B line is the one cell at one velocity. Run with ``python
 tests/benchmarks/rbc_slice_build.py [--workers 2] [--max-time 900]``; a rerun resumes (every
@@ -28,7 +28,7 @@ from lubrication.geometry import cell_from_volume_area
 
 FOLDER = Path(__file__).resolve().parents[2] / "docs" / "data" / "rbc_slice_build"
 GS_N_M = 6e-6                                            # Hochmuth & Waugh 1987
-VELOCITIES_MM_S = (0.06, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0)
+VELOCITIES_MM_S = (0.01, 0.02, 0.03, 0.06, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0)
 NU = (0.55, 0.6, 0.65, 0.7)
 LAM_RATIO = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95)
 
