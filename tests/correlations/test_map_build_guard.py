@@ -361,3 +361,21 @@ def test_pack_reports_the_points_it_rejected_as_unphysical(cli, tmp_path):
     data = json.loads(out)
     assert data["points"] == 1 and data["rejected"] == 1 and data["holes"] == 1
     assert "1 converged points rejected as unphysical" in err
+
+
+def test_a_red_cell_slows_down_from_its_next_velocity_up(tmp_path):
+    """The warm start of a red-cell point is the converged point stored at the same (ν, λ/λc)
+    with the next Ca_B up (the same cell faster); failed points, other (ν, λ/λc) and slower
+    points are not."""
+    def store(nu, r, ca_b, success):
+        rec = {"nu": nu, "lam_ratio": r, "ca_b": ca_b, "success": success,
+               "shape": {"modes": [0.1], "density": []} if success else None}
+        (tmp_path / map_build.point_filename("bem", nu, r, ca_b)).write_text(json.dumps(rec))
+    store(0.6, 0.3, 10.0, True)
+    store(0.6, 0.3, 15.0, False)
+    store(0.6, 0.3, 40.0, True)
+    store(0.65, 0.3, 12.0, True)
+    store(0.6, 0.35, 12.0, True)
+    assert map_build._faster_point(tmp_path, 0.6, 0.3, 5.0)["ca_b"] == 10.0
+    assert map_build._faster_point(tmp_path, 0.6, 0.3, 10.0)["ca_b"] == 40.0
+    assert map_build._faster_point(tmp_path, 0.6, 0.3, 40.0) is None
