@@ -563,7 +563,7 @@ RBC_HIGH_SHEAR = 50.0
 #: Tubes [µm] and mean velocities [mm/s] at which the red-cell map is read for η_rel against
 #: flow rate (:func:`_velocity_rows`; Secomb et al.'s capillaries and flow rates).
 RBC_VELOCITY_TUBES_UM = (4.0, 5.0, 6.0, 8.0)
-RBC_VELOCITIES_MM_S = (0.2, 0.3, 0.5, 1.0, 2.0, 4.0, 8.0)
+RBC_VELOCITIES_MM_S = (0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0, 4.0, 8.0)
 #: Tube hematocrit of fig. Kt.
 H_T_KT = 0.45
 

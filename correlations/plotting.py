@@ -18,8 +18,8 @@ from .viscosity import VISCOSITY_LAWS, relative_viscosity
 __all__ = ["plot_relative_viscosity", "plot_single_file_viscosity", "plot_estimate", "plot_check"]
 
 #: Mean velocities U [mm/s] of the curves of :func:`plot_single_file_viscosity`: capillary
-#: red-cell speeds around the typical 1 mm/s (the red-cell map spans 0.06-10 mm/s).
-SINGLE_FILE_VELOCITIES_MM_S = (0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0)
+#: red-cell speeds, about three per decade (those outside the membrane's map are left out).
+SINGLE_FILE_VELOCITIES_MM_S = (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0)
 
 
 def _figure(**kwargs):

@@ -229,10 +229,10 @@ def test_cli_plot_writes_a_png_with_one_line_per_velocity(cli, synthetic, tmp_pa
                        "--plot", str(target))
     assert code == 0, err
     assert target.read_bytes().startswith(PNG_SIGNATURE)
-    # the default velocities and the case's, clipped to those the analytic map takes (0.5, 1
-    # and 2; at its ends 0.2 and 5 mm/s fall just outside its rounded Ca_B nodes)
+    # the default velocities and the case's, clipped to those the analytic map takes (0.3, 1,
+    # 2 and 3; it spans just inside 0.2-5 mm/s)
     taken = [u for u in sorted({*SINGLE_FILE_VELOCITIES_MM_S, 2.0}) if _takes(u)]
-    assert {0.5, 1.0, 2.0} <= set(taken) and not {0.1, 10.0} & set(taken)
+    assert {0.3, 1.0, 2.0, 3.0} <= set(taken) and not {0.1, 10.0} & set(taken)
     lines = _velocity_lines(drawn[0])
     assert [line.get_label() for line in lines] == [
         f"U = {u:g} mm/s" + (" (this case)" if u == 2.0 else "") for u in taken]
