@@ -745,7 +745,7 @@ def _verdict(case: VesicleInputs, ladder: _Ladder, prof: dict, err: dict) -> tup
     if fine["film_min"] < FILM_CLOSED:
         problems.append(f"the film closes (min gap {fine['film_min']:.2e} R)")
         found.append(Status.NO_STEADY_STATE)
-    if case.shear is not None and not fine["tension_max"] > 0.0:
+    if case.shear is not None and fine["tension_max"] <= 0.0:
         problems.append(f"the membrane is compressed everywhere (largest isotropic tension "
                         f"{fine['tension_max']:.3g} ηU): a self-equilibrated elastic state, "
                         f"not the flow-driven one")
