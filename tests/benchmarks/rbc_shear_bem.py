@@ -53,8 +53,8 @@ GS_N_M = 6e-6                                   # Hochmuth & Waugh 1987
 REFERENCE = "biconcave"
 TUBE_HEMATOCRIT = 0.3
 DIAMETERS_UM = (4.0, 5.0, 6.0, 8.0)
-#: from Ca_S = 0.002 (the BEM's lower bound is 1e-3) to 1.6
-VELOCITIES_MM_S = (0.01, 0.02, 0.03, 0.06, 0.1, 0.2, 0.5, 1.0, 2.0, 4.0, 8.0)
+#: from Ca_S = 0.012 to 1.6 (the red-cell map reaches lower, docs/red-cell.md)
+VELOCITIES_MM_S = (0.06, 0.1, 0.2, 0.5, 1.0, 2.0, 4.0, 8.0)
 #: besides these, a red cell's row has the smallest squared azimuthal stretch of its membrane,
 #: (r/r_ref)^2 at equal area coordinate (``stretch_phi_sq_min``)
 QUANTITIES = ("V_over_U", "dp_plus_R0", "ell", "film_min", "tension_front", "tension_rear",
