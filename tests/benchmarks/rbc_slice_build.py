@@ -28,7 +28,7 @@ from lubrication.geometry import cell_from_volume_area
 
 FOLDER = Path(__file__).resolve().parents[2] / "docs" / "data" / "rbc_slice_build"
 GS_N_M = 6e-6                                            # Hochmuth & Waugh 1987
-VELOCITIES_MM_S = (0.01, 0.02, 0.03, 0.06, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0)
+VELOCITIES_MM_S = (0.01, 0.03, 0.06, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0)
 NU = (0.55, 0.6, 0.65, 0.7)
 LAM_RATIO = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95)
 
