@@ -766,7 +766,7 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
         For a bad input, before any work; for a red cell, a velocity (named
         ``velocity_mm_s``) whose Ca_S is outside the solvers' range 0.01-1e4 with a solver
         enabled, or without one, outside the Ca_B range of the red-cell map that answers for
-        this cell (0.2-10 mm/s for the default cell and plasma).
+        this cell (0.01-10 mm/s for the default cell and plasma).
 
     Examples
     --------
