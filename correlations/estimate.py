@@ -507,7 +507,7 @@ def solvers_ca_s_range(solvers: tuple) -> tuple[float, float]:
     :data:`bem.vesicle.CA_S_RANGE` (the BEM reaches lower Ca_S by continuation along the
     velocity), intersected."""
     from bem.vesicle.inputs import CA_S_RANGE as BEM   # lazy: scipy
-    from lubrication.solve import CA_S_RANGE as LUBRICATION
+    from lubrication.solve import CA_S_RANGE as LUBRICATION  # lazy: scipy
     ranges = [{"lubrication": LUBRICATION, "bem": BEM}[s] for s in solvers if s != MAP]
     return (max((r[0] for r in ranges), default=0.0),
             min((r[1] for r in ranges), default=math.inf))

@@ -244,7 +244,7 @@ def test_vesicle_json_names_its_start_and_the_other_branch(cli):
 
 
 @pytest.mark.parametrize("argv, needles", [
-    (["--ca-s", "-1"], ["--ca-s", "-1", "0.01"]),
+    (["--ca-s", "-1"], ["--ca-s", "-1", "0.001"]),
     (["--ca-s", "nan"], ["--ca-s"]),
     (["--ca-s", "0.2", "--reference", "torus"], ["--reference", "torus"]),
     (["--ca-s", "0.2", "--nu", "0.9"], ["nu", "0.743", "spheroid"]),
