@@ -502,7 +502,7 @@ def _default_cell() -> tuple:
                   f"{d['volume_fl']:g} fL, the default red cell")
 
 
-def solvers_ca_s_range(solvers: tuple) -> tuple[float, float]:
+def _solvers_ca_s_range(solvers: tuple) -> tuple[float, float]:
     """The Ca_S every enabled solver takes: :data:`lubrication.solve.CA_S_RANGE`,
     :data:`bem.vesicle.CA_S_RANGE` (the BEM reaches lower Ca_S by continuation along the
     velocity), intersected."""
@@ -516,13 +516,13 @@ def solvers_ca_s_range(solvers: tuple) -> tuple[float, float]:
 def _check_red_cell_solve(nu: float, ca_s: float, solvers: tuple, ca_s_name: str, nu_name: str,
                           ca_s_range=None) -> None:
     """With a solver enabled, a red cell the solvers can take, checked before any work: Ca_S
-    within :func:`solvers_ca_s_range` (``ca_s_range(lo, hi)`` -> ``(value, lo, hi, reason)``:
+    within :func:`_solvers_ca_s_range` (``ca_s_range(lo, hi)`` -> ``(value, lo, hi, reason)``:
     the same range expressed in the caller's input) and nu where the stress-free Evans–Fung
     disc exists (:func:`lubrication.membrane.reference_nu_range`)."""
     if not solvers:
         return
     from lubrication.membrane import reference_nu_range   # lazy: scipy, numba
-    lo, hi = solvers_ca_s_range(solvers)
+    lo, hi = _solvers_ca_s_range(solvers)
     if not lo <= ca_s <= hi:
         value, vlo, vhi, reason = ca_s_range(lo, hi) if ca_s_range else (ca_s, lo, hi, "")
         raise InvalidParameterError(
@@ -764,9 +764,10 @@ def estimate(volume_fl: float = RBC_DEFAULTS["volume_fl"],
         If the tube is narrower than the critical diameter d_c.
     InvalidParameterError
         For a bad input, before any work; for a red cell, a velocity (named
-        ``velocity_mm_s``) whose Ca_S is outside the solvers' range 0.01-1e4 with a solver
-        enabled, or without one, outside the Ca_B range of the red-cell map that answers for
-        this cell (0.01-10 mm/s for the default cell and plasma).
+        ``velocity_mm_s``) whose Ca_S is outside the enabled solvers' range (from 1e-3 for the
+        BEM, 1e-2 for lubrication, to 1e4), or without one, outside the Ca_B range of the
+        red-cell map that answers for this cell (0.01-10 mm/s for the default cell and
+        plasma).
 
     Examples
     --------
