@@ -1311,8 +1311,8 @@ def _velocity_rows(red_cell_map) -> list[Statement]:
     et al. 1986), checked on our BEM red cell, the red-cell map at ``red_cell_map`` (the
     default cell, :func:`red_cell`, in the tubes :data:`RBC_VELOCITY_TUBES_UM` at the velocities
     :data:`RBC_VELOCITIES_MM_S`, Ca_B ∝ U): η_rel at H_T = 0.45 (Chen et al. single-file law,
-    the cell's R0) between consecutive velocities of one tube where the map answers; "almost independent": every change per doubling of U,
-    (η_b/η_a)^(1/log2(U_b/U_a)) − 1, below :data:`RBC_TOL` ``per_doubling`` in size where the
+    the cell's R0) between consecutive velocities of one tube where the map answers; "almost
+    independent": every change per doubling of U, (η_b/η_a)^(1/log2(U_b/U_a)) − 1, below :data:`RBC_TOL` ``per_doubling`` in size where the
     slower velocity has U/d > 50 s⁻¹; "increases": η_rel higher at the slower velocity of
     every pair whose slower velocity has U/d ≤ 50 s⁻¹."""
     hi_text = (f"η_rel almost independent of flow rate at U/d > {RBC_HIGH_SHEAR:g} s⁻¹ "

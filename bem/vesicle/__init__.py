@@ -55,5 +55,6 @@ from .seeds import (
 
 __all__ = ["CA_B_MAX", "CA_B_MIN", "CA_S_RANGE", "MAX_MODES", "NEAR_CRITICAL",
            "WALL_REFINEMENT", "VesicleInputs", "VesicleOperator", "capsule_seed",
-           "check_vesicle_case", "check_vesicle_inputs", "fit_lubrication", "level_function", "lubrication_seed",
-           "seed_from_lubrication", "solve_vesicle", "spheroid_seed", "vesicle_discretisation"]
+           "check_vesicle_case", "check_vesicle_inputs", "fit_lubrication", "level_function",
+           "lubrication_seed", "seed_from_lubrication", "solve_vesicle", "spheroid_seed",
+           "vesicle_discretisation"]

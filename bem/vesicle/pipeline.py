@@ -479,17 +479,18 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
         return dataclasses.replace(res, timings=timings, **changes)
 
     starts = _starts(case, initial, branch, seed_bank)
-    res, failures, failed = None, [], []
+    # a red cell's continuation along the velocity: before the starts when slow, else after
     along = red_cell and initial is None
-    if along and case.ca_s < VELOCITY_FIRST:
+    first = along and case.ca_s < VELOCITY_FIRST
+    res, failures, failed = None, [], []
+    if first:
         res, label, why = _velocity_continuation(case, seed_bank, solve, branch, deadline)
-        along = False
         if res is None:
             failures.append(why)
     if res is None:
         res, label, failed = _first_converged(starts, solve, branch, deadline)
         failures += [f"{lab}: {why}" for lab, why, _ in failed]
-    if res is None and along and not deadline.expired():
+    if res is None and along and not first and not deadline.expired():
         res, label, why = _velocity_continuation(case, seed_bank, solve, branch, deadline)
         if res is None:
             failures.append(why)
