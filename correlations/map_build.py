@@ -335,7 +335,7 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
         return SpectralCurve.with_volume_radius(warm["shape"]["modes"], lam,
                                                 density=warm["shape"]["density"])
 
-    starts = [("own", lambda: None)]
+    starts, faster = [("own", lambda: None)], False
     if warm is not None:
         # the same cell faster (a red cell: the physical path, :func:`_faster_point`) first;
         # a neighbour at the same velocity is not for a slow red cell, where it may sit on a
@@ -349,6 +349,12 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     deadline = None if max_time is None else time.monotonic() + max_time
     failures, found, bie, res = [], [], 0, None
     for label, make_initial in starts:
+        # the same cell faster is on a steady branch: as for a stored shape, an estimate still
+        # above the tolerance at the default cap is resolution, so its ladder may climb to
+        # MAX_MODES (bem.vesicle.pipeline)
+        climb = (label != "own" and faster and "n_modes" not in options
+                 and "max_modes" not in options)
+        kw = {**options, "max_modes": vesicle.MAX_MODES} if climb else options
         left = None if deadline is None else deadline - time.monotonic()
         if left is not None and left <= 0:
             failures.append(f"{label}: not tried, max_time spent")
@@ -358,7 +364,7 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
         try:
             initial = make_initial()
             res = vesicle.solve_vesicle(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial,
-                                        max_time=left, **options)
+                                        max_time=left, **kw)
         except InvalidParameterError as exc:
             if initial is None and label == "own":
                 raise

@@ -7,11 +7,12 @@ takes (ranges, and the envelope below) without loading numba, and returns them a
 
 Resource envelope:
 
-* shape modes 8 <= n_modes, max_modes, rung_modes <= :data:`MAX_MODES` = 96 (the long vesicle at
-  (0.6, 0.98 λc) needs 88–96; a level of N modes has max(8, ceil(N/3)) panels and a difference
-  Jacobian costs N BEM evaluations, ~0.02–0.08 s each (one load column), two at a time on 2
-  cores, so 96 modes is ~5 s per Jacobian); peak memory stays below 1 GB (measured 553 MB for the
-  default solve at (0.6, 0.98 λc), two evaluations at a time).
+* shape modes 8 <= n_modes, max_modes, rung_modes <= :data:`MAX_MODES` = 160 (the long vesicle at
+  (0.6, 0.98 λc) needs 88–96; a slow, confined red cell more: (0.6, 0.9 λc, Ca_B 2.78,
+  Ca_S 0.012) converges at 152 modes, 69 s from the same cell at 0.2 mm/s). A level of N modes
+  has max(8, ceil(N/3)) panels; a level costs 2–6 s at 96–152 modes on 2 cores, and peak memory
+  stays about 1 GB (measured 553 MB for the default solve at (0.6, 0.98 λc), 0.99 GB for that
+  red cell at 152 modes).
 * :data:`CA_B_MIN` = 0.01 <= Ca_B <= :data:`CA_B_MAX` = 1e5, the range of the lubrication
   solver that provides the initial shape (:mod:`lubrication.solve`; at 1e5 bending is within
   1e-6 of the high-Ca model). Ca_B = ηUR0²/κ is ~1–1000 for red blood cells (Chen et al.
@@ -39,7 +40,7 @@ __all__ = ["CA_B_MAX", "CA_B_MIN", "CA_S_RANGE", "MAX_MODES", "VesicleInputs",
            "check_vesicle_case", "check_vesicle_inputs", "mode_count"]
 
 #: most shape modes of one level (resource envelope, module docstring)
-MAX_MODES = 96
+MAX_MODES = 160
 #: bending capillary numbers accepted (module docstring)
 CA_B_MIN, CA_B_MAX = 1e-2, 1e5
 #: shear capillary numbers ηU/G_s of a red cell accepted: from 1e-3 (0.005 mm/s for the

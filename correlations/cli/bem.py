@@ -57,9 +57,9 @@ _OPTIONS = {"lam": "--lam", "lam_ratio": "--lam-ratio", "lams": "--lam", "lam_ra
 SPHERE_PANELS = (3, 51, "a mesh has at most 4000 unknowns, ~0.55 GB")
 #: Drop shape modes (bem.drop.MAX_MODES): 64 modes make 22 drop panels, ~0.2 GB of operators.
 DROP_MODES = (6, 64, "22 drop panels and ~0.2 GB of operators at 64")
-#: Vesicle shape modes (bem.vesicle.MAX_MODES): 96 modes cost ~5 s per Jacobian on 2 cores
-#: and < 1 GB; the automatic refinement's largest level starts at 24.
-VESICLE_MODES = (8, 96, "~5 s per Newton Jacobian on 2 cores and < 1 GB at 96")
+#: Vesicle shape modes (bem.vesicle.MAX_MODES): a level of 152 modes costs ~6 s on 2 cores
+#: and ~1 GB; the automatic refinement's largest level starts at 24.
+VESICLE_MODES = (8, 160, "a level costs ~6 s on 2 cores and ~1 GB at 152")
 VESICLE_MAX_MODES = (24,) + VESICLE_MODES[1:]
 
 

@@ -334,9 +334,9 @@ def add_map_parser(subparsers) -> None:
     b.add_argument("--methods", nargs="+", choices=("bem", "lubrication"),
                    help="solvers (default both)")
     b.add_argument("--bem-n-modes", type=positive_int,
-                   help="BEM shape modes, 8 to 96 (default: automatic refinement)")
+                   help="BEM shape modes, 8 to 160 (default: automatic refinement)")
     b.add_argument("--bem-max-modes", type=positive_int,
-                   help="BEM largest mode count of the refinement, 24 to 96")
+                   help="BEM largest mode count of the refinement, 24 to 160")
     b.add_argument("--bem-tol", type=finite_float,
                    help="BEM relative tolerance of the refinement pair, 1e-12 to 0.5 [-] "
                         "(default 1e-4)")

@@ -169,7 +169,7 @@ def test_plot_shape_labels_axes():
     (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--max-modes", "1e308"],
      ("--max-modes", "1e308")),
     (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--max-modes", "500"],
-     ("--max-modes", "96")),
+     ("--max-modes", "160")),
     (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--tol", "nan"], ("--tol", "nan")),
     (["bem", "vesicle", "--nu", "0.9", "--lam", "1.0", "--residual-tol", "-inf"],
      ("--residual-tol",)),
