@@ -39,8 +39,8 @@ A red cell (``ca_s`` finite: the membrane's shear elasticity, :mod:`bem.shear`) 
 by continuation along its velocity (:func:`_velocity_continuation`): the same cell faster, at
 Ca_S = :data:`SHEAR_START` where shear is a modest correction and the starts (the stored shapes
 are vesicles') converge, then slowed down step by step at fixed β = Ca_B/Ca_S to the case's
-velocity, the last solve allowed up to MAX_MODES like a stored shape's. It is the physical path
-(a cell slowing down), and below :data:`VELOCITY_FIRST` it is tried before the direct starts:
+velocity, the last solve allowed up to MAX_MODES like a stored shape's (:func:`branch_modes`).
+It is the physical path (a cell slowing down), and below :data:`VELOCITY_FIRST` it is tried before the direct starts:
 there the stored vesicle shapes lie far from the cell's own and end in compressed,
 self-equilibrated states (:mod:`bem.vesicle.ladder`) or stall (on the red-cell slice at
 0.1 mm/s, 20 of 40 points converged from them; continued from 0.2 mm/s the same points
@@ -123,6 +123,21 @@ SHEAR_BISECTIONS = 3
 VELOCITY_FIRST = 0.15
 
 
+#: Top of the ladder of a vesicle started from a shape on a steady branch (a stored shape), where
+#: the case leaves ``max_modes`` to the solver: 200 random points of the vesicle domain
+#: converged within it (docs/data/vesicle_domain*.json), and a start stalled in a non-steady
+#: minimum climbs the whole ladder before the next start is tried.
+VESICLE_BRANCH_MODES = 96
+
+
+def branch_modes(case: VesicleInputs) -> int:
+    """Top of the ladder from a shape on a steady branch (a stored shape, a red cell's own start
+    or faster self): :data:`VESICLE_BRANCH_MODES` for a vesicle; MAX_MODES for a red cell,
+    which converges more slowly in modes where slow and confined (its shear load: at 0.03–0.06
+    mm/s and λ/λc 0.6–0.9 on the red-cell slice, 104–152 modes, docs/vesicle-solver.md)."""
+    return VESICLE_BRANCH_MODES if case.shear is None else MAX_MODES
+
+
 @dataclasses.dataclass(frozen=True)
 class Start:
     """One start of the pipeline: its ``label``, ``make()`` -> the initial shape (None: the
@@ -137,16 +152,16 @@ class Start:
 
 def _starts(case: VesicleInputs, initial, branch: str | None, seed_bank: bool) -> list[Start]:
     """The starts of :func:`~bem.vesicle.solve_vesicle` in the order tried (module docstring).
-    A stored shape's ladder may climb to MAX_MODES where the case leaves ``max_modes`` to the
-    solver: its shape is on a steady branch, so an estimate still above the tolerance at the
-    own seed's default cap (80) is resolution, not a spurious minimum (measured at
-    (0.6267, 0.7517 λc, Ca_B 439): unresolved at 80 modes, V/U estimate 1.1e-4; converged at
-    88, 46 s). A red cell's own start may too: it converges more slowly in modes than a
+    A stored shape's ladder may climb to :func:`branch_modes` where the case leaves
+    ``max_modes`` to the solver: its shape is on a steady branch, so an estimate still above
+    the tolerance at the own seed's default cap (80) is resolution, not a spurious minimum
+    (measured at (0.6267, 0.7517 λc, Ca_B 439): unresolved at 80 modes, V/U estimate 1.1e-4;
+    converged at 88, 46 s). A red cell's own start may too: it converges more slowly in modes than a
     vesicle (docs/vesicle-solver.md), e.g. (0.5641, 0.319 λc, Ca_B 388.5, Ca_S 0.146) was
     unresolved at its cap (Δp⁺ estimate 1.4e-4) and converges at 88 modes."""
     if initial is not None:
         return [Start("initial", lambda: initial, case, own=True)]
-    deeper = (dataclasses.replace(case, max_modes=MAX_MODES)
+    deeper = (dataclasses.replace(case, max_modes=branch_modes(case))
               if case.max_modes is None and case.n_modes is None else case)
     own = [Start("own", lambda: None, deeper if case.shear is not None else case, own=True)]
     if not seed_bank:
@@ -283,8 +298,8 @@ def _velocity_continuation(case: VesicleInputs, seed_bank: bool, solve, branch: 
         res, at, factor, misses = nxt, nxt_at, SHEAR_FACTOR, 0
         path.append(at)
     # the continued shape is on a steady branch: as for a stored shape, an estimate still above
-    # the tolerance at the default cap is resolution, so the ladder may climb to MAX_MODES
-    final = solve(res, dataclasses.replace(case, max_modes=MAX_MODES)
+    # the tolerance at the default cap is resolution, so the ladder may climb further
+    final = solve(res, dataclasses.replace(case, max_modes=branch_modes(case))
                   if case.max_modes is None and case.n_modes is None else case)
     rungs = ", ".join(f"{case.ca_s * a:.3g}" for a in path)
     if final.success and branch in (None, final.shape_class):
@@ -421,7 +436,7 @@ def solve_vesicle(nu: float, lam: float | None = None, *, lam_ratio: float | Non
     max_time : float, optional
         Wall-time budget [s] (:class:`lubrication.checks.Deadline`), tested between BEM
         evaluations, levels and continuation rungs; when spent the result has status
-        TIME_LIMIT. Default: no limit. Mode counts are at most MAX_MODES = 96.
+        TIME_LIMIT. Default: no limit. Mode counts are at most MAX_MODES = 160.
     branch : {"parachute", "bullet"}, optional
         Shape class to return where two steady states coexist: only stored shapes of that
         class are tried as starts, and a solve that ends in the other class does not count as

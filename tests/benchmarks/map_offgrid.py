@@ -23,9 +23,9 @@ None). In the second group the cell holds a bullet–parachute transition or, at
 end of the elongated or the parachute branch, two steady states that coexist
 (tests/benchmarks/map_bistability.py); interpolation across them has no accuracy to claim, only
 its error bar. Direct solves that do not converge, and map queries that return None (next to a
-hole), are listed and left out of the statistics. Results are stored point by point in the JSON file
-(atomic writes; a rerun skips the points already solved with the same map). Not a test: a
-BEM solve takes 3–60 s per point on 2 cores.
+hole), are listed and left out of the statistics. Results are stored point by point in the JSON
+file (atomic writes; a rerun skips the points already solved, and with ``--retry-failed`` solves
+again those that did not converge). Not a test: a BEM solve takes 3–60 s per point on 2 cores.
 """
 
 from __future__ import annotations
@@ -123,6 +123,9 @@ def main(argv=None) -> int:
                     "(default: log-uniform in [5, 500])")
     ap.add_argument("--ca-b-range", type=float, nargs=2, metavar=("LO", "HI"),
                     help="log-uniform Ca_B range (default 5 500)")
+    ap.add_argument("--retry-failed", action="store_true",
+                    help="solve again the stored direct solves that did not converge (e.g. "
+                         "after a change of the solver)")
     args = ap.parse_args(argv)
     if args.points < 1:
         ap.error(f"--points must be >= 1, got {args.points}")
@@ -142,7 +145,8 @@ def main(argv=None) -> int:
         box["ca_b_range"] = tuple(args.ca_b_range)
     for point in sample(args.points, m.grid, args.ca_b, **box):
         row = done.get(point)
-        if row is None or (not row["direct"]["success"] and "seed" not in row["direct"]):
+        if row is None or (not row["direct"]["success"]
+                           and ("seed" not in row["direct"] or args.retry_failed)):
             row = {"point": list(point), "direct": _direct(*point, shear_ratio=beta)}
         query = query_map(*point, map=m)
         row["map"] = {q: {"value": query.quantities[q].value, "error": query.quantities[q].error,
