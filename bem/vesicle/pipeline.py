@@ -40,11 +40,11 @@ by continuation along its velocity (:func:`_velocity_continuation`): the same ce
 Ca_S = :data:`SHEAR_START` where shear is a modest correction and the starts (the stored shapes
 are vesicles') converge, then slowed down step by step at fixed β = Ca_B/Ca_S to the case's
 velocity, the last solve allowed up to MAX_MODES like a stored shape's (:func:`branch_modes`).
-It is the physical path (a cell slowing down), and below :data:`VELOCITY_FIRST` it is tried before the direct starts:
-there the stored vesicle shapes lie far from the cell's own and end in compressed,
-self-equilibrated states (:mod:`bem.vesicle.ladder`) or stall (on the red-cell slice at
-0.1 mm/s, 20 of 40 points converged from them; continued from 0.2 mm/s the same points
-converge at 32 modes in about a second). Neither the time relaxation (its time-dependent solver
+It is the physical path (a cell slowing down), and below :data:`VELOCITY_FIRST` it is tried
+before the direct starts: there the stored vesicle shapes lie far from the cell's own and end
+in compressed, self-equilibrated states (:mod:`bem.vesicle.ladder`) or stall (on the red-cell
+slice at 0.1 mm/s, 20 of 40 points converged from them; continued from 0.2 mm/s the same
+points converge at 32 modes in about a second). Neither the time relaxation (its time-dependent solver
 has no shear elasticity) nor the probe for a second branch is run for a red cell.
 """
 
@@ -156,8 +156,8 @@ def _starts(case: VesicleInputs, initial, branch: str | None, seed_bank: bool) -
     ``max_modes`` to the solver: its shape is on a steady branch, so an estimate still above
     the tolerance at the own seed's default cap (80) is resolution, not a spurious minimum
     (measured at (0.6267, 0.7517 λc, Ca_B 439): unresolved at 80 modes, V/U estimate 1.1e-4;
-    converged at 88, 46 s). A red cell's own start may too: it converges more slowly in modes than a
-    vesicle (docs/vesicle-solver.md), e.g. (0.5641, 0.319 λc, Ca_B 388.5, Ca_S 0.146) was
+    converged at 88, 46 s). A red cell's own start may too: it converges more slowly in modes
+    than a vesicle (docs/vesicle-solver.md), e.g. (0.5641, 0.319 λc, Ca_B 388.5, Ca_S 0.146) was
     unresolved at its cap (Δp⁺ estimate 1.4e-4) and converges at 88 modes."""
     if initial is not None:
         return [Start("initial", lambda: initial, case, own=True)]
