@@ -43,7 +43,7 @@ REF_09_10 = {"V_over_U": 1.2574636, "dp_plus_R0": 13.716092}
     ({"nu": 0.9, "lam": 1.0, "ca_b": math.inf}, InvalidParameterError),
     ({"nu": 0.9, "lam": 1.0, "n_modes": 3}, InvalidParameterError),
     ({"nu": 0.9, "lam": 1.0, "n_modes": 10**21}, InvalidParameterError),
-    ({"nu": 0.9, "lam": 1.0, "max_modes": 97}, InvalidParameterError),
+    ({"nu": 0.9, "lam": 1.0, "max_modes": 161}, InvalidParameterError),
     ({"nu": 0.98, "lam": 0.3, "max_modes": 12}, InvalidParameterError),  # no refinement pair
     ({"nu": 0.9, "lam": 1.0, "ca_b": 1e308}, InvalidParameterError),
     ({"nu": 0.9, "lam": 1.0, "ca_b": 1e-300}, InvalidParameterError),
