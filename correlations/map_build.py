@@ -19,7 +19,8 @@ which every solve starts from the previous converged point (:func:`line_tasks`):
   from its 0.95 λc shape along λ, (0.9, 0.98 λc) failed at 80 modes (608 s), the rungs converge.
   Below it the neighbour's shape is tried first and the solver's own seed second. A red cell
   (``shear_ratio``) starts instead from the same (ν, λ/λc) at the next velocity up where that
-  point is stored and converged (:func:`_faster_point`), first whatever λ/λc; below
+  point is stored and converged (:func:`_faster_point`), first whatever λ/λc, its ladder allowed
+  up to ``bem.vesicle.MAX_MODES`` like a stored shape's; below
   Ca_S = ``bem.vesicle.pipeline.VELOCITY_FIRST`` a neighbour at the same velocity comes after
   the solver's own continuation along the velocity. The record's ``seed`` names the start that
   converged, its ``message`` the reasons of the others.
