@@ -1312,9 +1312,10 @@ def _velocity_rows(red_cell_map) -> list[Statement]:
     default cell, :func:`red_cell`, in the tubes :data:`RBC_VELOCITY_TUBES_UM` at the velocities
     :data:`RBC_VELOCITIES_MM_S`, Ca_B ∝ U): η_rel at H_T = 0.45 (Chen et al. single-file law,
     the cell's R0) between consecutive velocities of one tube where the map answers; "almost
-    independent": every change per doubling of U, (η_b/η_a)^(1/log2(U_b/U_a)) − 1, below :data:`RBC_TOL` ``per_doubling`` in size where the
-    slower velocity has U/d > 50 s⁻¹; "increases": η_rel higher at the slower velocity of
-    every pair whose slower velocity has U/d ≤ 50 s⁻¹."""
+    independent": every change per doubling of U, (η_b/η_a)^(1/log2(U_b/U_a)) − 1, below
+    :data:`RBC_TOL` ``per_doubling`` in size where the slower velocity has U/d > 50 s⁻¹;
+    "increases": η_rel higher at the slower velocity of every pair whose slower velocity has
+    U/d ≤ 50 s⁻¹."""
     hi_text = (f"η_rel almost independent of flow rate at U/d > {RBC_HIGH_SHEAR:g} s⁻¹ "
                "(our BEM red cell)")
     lo_text = ("η_rel increases with decreasing flow rate at lower shear rates (U/d ≤ "

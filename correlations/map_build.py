@@ -20,7 +20,7 @@ which every solve starts from the previous converged point (:func:`line_tasks`):
   Below it the neighbour's shape is tried first and the solver's own seed second. A red cell
   (``shear_ratio``) starts instead from the same (ν, λ/λc) at the next velocity up where that
   point is stored and converged (:func:`_faster_point`), first whatever λ/λc, its ladder allowed
-  up to ``bem.vesicle.MAX_MODES`` like a stored shape's; below
+  as high as a stored shape's (``bem.vesicle.pipeline.branch_modes``); below
   Ca_S = ``bem.vesicle.pipeline.VELOCITY_FIRST`` a neighbour at the same velocity comes after
   the solver's own continuation along the velocity. The record's ``seed`` names the start that
   converged, its ``message`` the reasons of the others.
@@ -328,7 +328,7 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
     of the next point or None)."""
     from bem import vesicle  # lazy: scipy and the BEM off the build's input checks
     from bem.shape import SpectralCurve  # lazy: with bem.vesicle
-    from bem.vesicle.pipeline import VELOCITY_FIRST  # lazy: with bem.vesicle
+    from bem.vesicle.pipeline import VELOCITY_FIRST, branch_modes  # lazy: with bem.vesicle
     options = point_options(options, ca_b)
 
     def neighbour():
@@ -347,15 +347,13 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
         label = (f"neighbour (nu={warm['nu']:g}, lam/lam_c={warm['lam_ratio']:g}"
                  + (f", Ca_B={warm['ca_b']:g})" if faster else ")"))
         starts.insert(0 if first else 1, (label, neighbour))
+    # the same cell faster is on a steady branch: as for a stored shape, an estimate still above
+    # the tolerance at the default cap is resolution, so its ladder may climb further
+    climb = faster and "n_modes" not in options and "max_modes" not in options
+    deeper = {**options, "max_modes": branch_modes(red_cell=True)} if climb else options
     deadline = None if max_time is None else time.monotonic() + max_time
     failures, found, bie, res = [], [], 0, None
     for label, make_initial in starts:
-        # the same cell faster is on a steady branch: as for a stored shape, an estimate still
-        # above the tolerance at the default cap is resolution, so its ladder may climb to
-        # MAX_MODES (bem.vesicle.pipeline)
-        climb = (label != "own" and faster and "n_modes" not in options
-                 and "max_modes" not in options)
-        kw = {**options, "max_modes": vesicle.MAX_MODES} if climb else options
         left = None if deadline is None else deadline - time.monotonic()
         if left is not None and left <= 0:
             failures.append(f"{label}: not tried, max_time spent")
@@ -365,7 +363,8 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
         try:
             initial = make_initial()
             res = vesicle.solve_vesicle(nu, lam_ratio=lam_ratio, ca_b=ca_b, initial=initial,
-                                        max_time=left, **kw)
+                                        max_time=left,
+                                        **(options if label == "own" else deeper))
         except InvalidParameterError as exc:
             if initial is None and label == "own":
                 raise

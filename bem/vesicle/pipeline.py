@@ -44,8 +44,8 @@ It is the physical path (a cell slowing down), and below :data:`VELOCITY_FIRST` 
 before the direct starts: there the stored vesicle shapes lie far from the cell's own and end
 in compressed, self-equilibrated states (:mod:`bem.vesicle.ladder`) or stall (on the red-cell
 slice at 0.1 mm/s, 20 of 40 points converged from them; continued from 0.2 mm/s the same
-points converge at 32 modes in about a second). Neither the time relaxation (its time-dependent solver
-has no shear elasticity) nor the probe for a second branch is run for a red cell.
+points converge at 32 modes in about a second). Neither the time relaxation (its time-dependent
+solver has no shear elasticity) nor the probe for a second branch is run for a red cell.
 """
 
 from __future__ import annotations
@@ -130,12 +130,13 @@ VELOCITY_FIRST = 0.15
 VESICLE_BRANCH_MODES = 96
 
 
-def branch_modes(case: VesicleInputs) -> int:
+def branch_modes(red_cell: bool) -> int:
     """Top of the ladder from a shape on a steady branch (a stored shape, a red cell's own start
-    or faster self): :data:`VESICLE_BRANCH_MODES` for a vesicle; MAX_MODES for a red cell,
-    which converges more slowly in modes where slow and confined (its shear load: at 0.03–0.06
-    mm/s and λ/λc 0.6–0.9 on the red-cell slice, 104–152 modes, docs/vesicle-solver.md)."""
-    return VESICLE_BRANCH_MODES if case.shear is None else MAX_MODES
+    or faster self, also in the map build): :data:`VESICLE_BRANCH_MODES` for a vesicle;
+    MAX_MODES for a red cell, which converges more slowly in modes where slow and confined (its
+    shear load: at 0.03–0.06 mm/s and λ/λc 0.6–0.9 on the red-cell slice, 104–152 modes,
+    docs/vesicle-solver.md)."""
+    return MAX_MODES if red_cell else VESICLE_BRANCH_MODES
 
 
 @dataclasses.dataclass(frozen=True)
@@ -161,7 +162,7 @@ def _starts(case: VesicleInputs, initial, branch: str | None, seed_bank: bool) -
     unresolved at its cap (Δp⁺ estimate 1.4e-4) and converges at 88 modes."""
     if initial is not None:
         return [Start("initial", lambda: initial, case, own=True)]
-    deeper = (dataclasses.replace(case, max_modes=branch_modes(case))
+    deeper = (dataclasses.replace(case, max_modes=branch_modes(case.shear is not None))
               if case.max_modes is None and case.n_modes is None else case)
     own = [Start("own", lambda: None, deeper if case.shear is not None else case, own=True)]
     if not seed_bank:
@@ -299,7 +300,7 @@ def _velocity_continuation(case: VesicleInputs, seed_bank: bool, solve, branch: 
         path.append(at)
     # the continued shape is on a steady branch: as for a stored shape, an estimate still above
     # the tolerance at the default cap is resolution, so the ladder may climb further
-    final = solve(res, dataclasses.replace(case, max_modes=branch_modes(case))
+    final = solve(res, dataclasses.replace(case, max_modes=branch_modes(case.shear is not None))
                   if case.max_modes is None and case.n_modes is None else case)
     rungs = ", ".join(f"{case.ca_s * a:.3g}" for a in path)
     if final.success and branch in (None, final.shape_class):
