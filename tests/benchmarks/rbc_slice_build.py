@@ -7,23 +7,25 @@ Waugh 1987) and the Evans-Fung disc as stress-free shape: BEM points on ν 0.55-
 ``shear_ratio`` β = G_s R0²/κ = Ca_B/Ca_S (:data:`correlations.solution_map.SHEAR_RATIO`), so
 that each Ca_B line is the one cell at one velocity, and the tolerance :data:`BEM_TOL`. Run
 with ``python tests/benchmarks/rbc_slice_build.py [--workers 2] [--max-time 900]``; a rerun
-resumes (every finished point is its own file). ``python tests/benchmarks/rbc_slice_build.py --pack
-correlations/data/rbc_slice_map.json`` packs its complete velocity lines (:func:`pack_complete`)
-into the map the red-cell estimate reads.
+resumes (every finished point is its own file); ``--retry-failed`` solves the failed points
+again, ``--from-neighbours`` from their converged λ/λc neighbours (:func:`retry_from_neighbours`).
+``python tests/benchmarks/rbc_slice_build.py --pack correlations/data/rbc_slice_map.json`` packs
+its complete velocity lines (:func:`pack_complete`) into the map the red-cell estimate reads.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+from concurrent.futures import ProcessPoolExecutor
 import shutil
 import tempfile
 from pathlib import Path
 
 from correlations.estimate import RBC_DEFAULTS
-from correlations.map_build import SHEAR_RATIO, build_map, make_grid
-from correlations.solution_map import pack_map, read_build
-from lubrication.io import write_json
+from correlations.map_build import SHEAR_RATIO, _point, build_map, make_grid
+from correlations.solution_map import pack_map, point_filename, read_build
+from lubrication.io import provenance, write_json
 from lubrication.geometry import cell_from_volume_area
 
 FOLDER = Path(__file__).resolve().parents[2] / "docs" / "data" / "rbc_slice_build"
@@ -75,18 +77,74 @@ def pack_complete(out: Path) -> tuple[Path, list[float]]:
         return pack_map(tmp, out), done
 
 
+def _from_neighbour(task: tuple) -> tuple:
+    """Solve the failed point (ν, λ/λc, Ca_B) from the stored converged point ``warm_file`` (a
+    λ/λc neighbour at the same ν and velocity) by the build's own point solver; the record
+    replaces the stored one only if it converged. Returns (point, status)."""
+    nu, r, ca, warm_file, max_time = task
+    warm = json.loads(Path(warm_file).read_text())
+    _, beta = slice_grid()
+    record, _ = _point("bem", nu, r, ca, warm, {SHEAR_RATIO: beta, "tol": BEM_TOL}, max_time,
+                       {**provenance(), "start": "converged λ/λc neighbour at the same velocity"})
+    if record["success"]:
+        write_json(FOLDER / point_filename("bem", nu, r, ca), record, indent=1, sort_keys=False)
+    return (nu, r, ca), record["status"]
+
+
+def retry_from_neighbours(workers: int, max_time: float) -> list[tuple]:
+    """Solve every failed point of the slice again, started from each converged λ/λc
+    neighbour on its (ν, velocity) line in turn (nearer first) until one converges. The build's
+    starts are the same cell faster, the neighbour in ν and the seed bank; where the slice's
+    points at ν = 0.55 self-intersect or find no steady state from those, the next confined
+    point at the same velocity can still be on the steady branch. Returns (point, status) per
+    attempt."""
+    grid = read_build(FOLDER)["grid"]
+    lams = grid["lam_ratio"]["bem"]
+    points = {}
+    for f in FOLDER.glob("bem_*.json"):
+        p = json.loads(f.read_text())
+        points[(p["nu"], p["lam_ratio"], p["ca_b"])] = (p["success"], f)
+    rounds = []
+    for (nu, r, ca), (ok, _) in sorted(points.items()):
+        if ok:
+            continue
+        i = lams.index(r)
+        near = sorted((j for j in (i - 1, i + 1) if 0 <= j < len(lams)),
+                      key=lambda j: abs(lams[j] - r))
+        rounds.append([(nu, r, ca, points[(nu, lams[j], ca)][1], max_time) for j in near
+                       if points.get((nu, lams[j], ca), (False,))[0]])
+    out = []
+    with ProcessPoolExecutor(workers) as pool:
+        for attempt in range(2):                      # nearer neighbour, then the other one
+            tasks = [t[attempt] for t in rounds if len(t) > attempt]
+            rounds = [t for t in rounds if len(t) > attempt]
+            results = list(pool.map(_from_neighbour, tasks))
+            for res in results:
+                print(*res, flush=True)
+            out += results
+            done = {p for p, status in results if status == "converged"}
+            rounds = [t for t in rounds if (t[0][0], t[0][1], t[0][2]) not in done]
+    return out
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--max-time", type=float, default=900.0, help="per point [s]")
     p.add_argument("--retry-failed", action="store_true",
                    help="solve again the stored points that did not converge")
+    p.add_argument("--from-neighbours", action="store_true",
+                   help="solve the failed points again from their converged λ/λc neighbours "
+                        "at the same velocity")
     p.add_argument("--pack", type=Path, metavar="FILE",
                    help="instead of building, pack the complete velocity lines into FILE")
     args = p.parse_args(argv)
     if args.pack:
         path, done = pack_complete(args.pack)
         print(f"packed {path}: Ca_B {', '.join(f'{c:g}' for c in done)}")
+        return 0
+    if args.from_neighbours:
+        retry_from_neighbours(args.workers, args.max_time)
         return 0
     grid, beta = slice_grid()
     print(build_map(FOLDER, grid, options={"bem": {SHEAR_RATIO: beta, "tol": BEM_TOL}},
