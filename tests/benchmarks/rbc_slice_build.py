@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import argparse
 import json
-from concurrent.futures import ProcessPoolExecutor
 import shutil
 import tempfile
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from correlations.estimate import RBC_DEFAULTS
@@ -55,6 +55,11 @@ def slice_grid() -> tuple[dict, float]:
                      methods=["bem"]), beta
 
 
+def bem_options() -> dict:
+    """The BEM options of every slice point: the default cell's β and :data:`BEM_TOL`."""
+    return {SHEAR_RATIO: slice_grid()[1], "tol": BEM_TOL}
+
+
 def pack_complete(out: Path) -> tuple[Path, list[float]]:
     """Pack the slice's complete velocity lines (every (ν, λ/λc) point stored, converged or
     not) into the map file ``out``; returns it and the Ca_B of the lines packed. Lines still
@@ -83,8 +88,7 @@ def _from_neighbour(task: tuple) -> tuple:
     replaces the stored one only if it converged. Returns (point, status)."""
     nu, r, ca, warm_file, max_time = task
     warm = json.loads(Path(warm_file).read_text())
-    _, beta = slice_grid()
-    record, _ = _point("bem", nu, r, ca, warm, {SHEAR_RATIO: beta, "tol": BEM_TOL}, max_time,
+    record, _ = _point("bem", nu, r, ca, warm, bem_options(), max_time,
                        {**provenance(), "start": "converged λ/λc neighbour at the same velocity"})
     if record["success"]:
         write_json(FOLDER / point_filename("bem", nu, r, ca), record, indent=1, sort_keys=False)
@@ -146,10 +150,8 @@ def main(argv=None) -> int:
     if args.from_neighbours:
         retry_from_neighbours(args.workers, args.max_time)
         return 0
-    grid, beta = slice_grid()
-    print(build_map(FOLDER, grid, options={"bem": {SHEAR_RATIO: beta, "tol": BEM_TOL}},
-                    workers=args.workers,
-                    max_time=args.max_time, retry_failed=args.retry_failed,
+    print(build_map(FOLDER, slice_grid()[0], options={"bem": bem_options()},
+                    workers=args.workers, max_time=args.max_time, retry_failed=args.retry_failed,
                     pack=False), flush=True)
     return 0
 
