@@ -6,11 +6,11 @@ The points are a fixed pseudo-random sample (seed 2026) of (ν, λ/λc, Ca_B) in
 box, ν in [0.6, 0.98], λ/λc in [0.2, 0.95], log-uniform Ca_B in [5, 500] (or the Ca_B values
 given with ``--ca-b``, or the range given with ``--ca-b-range``), none on a node of the map's
 grid (each coordinate at least 0.2 of a grid step from the nearest node; a finer grid thus
-draws new points where old ones now lie near a node). Each is solved directly by the BEM at its default options (Ca_B given; the
-default solve starts from the nearest stored shapes of the seed bank, :mod:`bem.seed_bank`) and
-compared with :func:`query_map` at the same point. For a red-cell map
-(:attr:`~correlations.solution_map.SolutionMap.membrane`) ν is drawn over the map's ν range and
-each point is the red cell of the map's shear ratio β, Ca_S = Ca_B/β (``python
+draws new points where old ones now lie near a node). Each is solved directly by the BEM at
+its default options (Ca_B given; the default solve starts from the nearest stored shapes of the
+seed bank, :mod:`bem.seed_bank`) and compared with :func:`query_map` at the same point. For a
+red-cell map (:attr:`~correlations.solution_map.SolutionMap.membrane`) ν is drawn over the
+map's ν range and each point is the red cell of the map's shear ratio β, Ca_S = Ca_B/β (``python
 tests/benchmarks/map_offgrid.py --map correlations/data/rbc_slice_map.json --json
 docs/data/rbc_slice_offgrid.json --points 24 --ca-b-range 4.6372 463.7179``).
 

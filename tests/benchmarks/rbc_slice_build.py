@@ -24,7 +24,7 @@ from pathlib import Path
 
 from correlations.estimate import RBC_DEFAULTS
 from correlations.map_build import SHEAR_RATIO, _point, build_map, make_grid
-from correlations.solution_map import pack_map, point_filename, read_build
+from correlations.solution_map import pack_map, point_filename, read_build, read_points
 from lubrication.io import provenance, write_json
 from lubrication.geometry import cell_from_volume_area
 
@@ -83,16 +83,15 @@ def pack_complete(out: Path) -> tuple[Path, list[float]]:
 
 
 def _from_neighbour(task: tuple) -> tuple:
-    """Solve the failed point (ν, λ/λc, Ca_B) from the stored converged point ``warm_file`` (a
-    λ/λc neighbour at the same ν and velocity) by the build's own point solver; the record
+    """Solve the failed point (ν, λ/λc, Ca_B) from ``warm``, the stored converged point of a
+    λ/λc neighbour at the same ν and velocity, by the build's own point solver; the record
     replaces the stored one only if it converged. Returns (point, status)."""
-    nu, r, ca, warm_file, max_time = task
-    warm = json.loads(Path(warm_file).read_text())
-    record, _ = _point("bem", nu, r, ca, warm, bem_options(), max_time,
+    point, warm, max_time = task
+    record, _ = _point("bem", *point, warm, bem_options(), max_time,
                        {**provenance(), "start": "converged λ/λc neighbour at the same velocity"})
     if record["success"]:
-        write_json(FOLDER / point_filename("bem", nu, r, ca), record, indent=1, sort_keys=False)
-    return (nu, r, ca), record["status"]
+        write_json(FOLDER / point_filename("bem", *point), record, indent=1, sort_keys=False)
+    return point, record["status"]
 
 
 def retry_from_neighbours(workers: int, max_time: float) -> list[tuple]:
@@ -102,32 +101,26 @@ def retry_from_neighbours(workers: int, max_time: float) -> list[tuple]:
     points at ν = 0.55 self-intersect or find no steady state from those, the next confined
     point at the same velocity can still be on the steady branch. Returns (point, status) per
     attempt."""
-    grid = read_build(FOLDER)["grid"]
-    lams = grid["lam_ratio"]["bem"]
-    points = {}
-    for f in FOLDER.glob("bem_*.json"):
-        p = json.loads(f.read_text())
-        points[(p["nu"], p["lam_ratio"], p["ca_b"])] = (p["success"], f)
-    rounds = []
-    for (nu, r, ca), (ok, _) in sorted(points.items()):
-        if ok:
-            continue
-        i = lams.index(r)
-        near = sorted((j for j in (i - 1, i + 1) if 0 <= j < len(lams)),
-                      key=lambda j: abs(lams[j] - r))
-        rounds.append([(nu, r, ca, points[(nu, lams[j], ca)][1], max_time) for j in near
-                       if points.get((nu, lams[j], ca), (False,))[0]])
+    lams = read_build(FOLDER)["grid"]["lam_ratio"]["bem"]
+    stored = {(p["nu"], p["lam_ratio"], p["ca_b"]): p for p in read_points(FOLDER)}
+    pending = {}                  # failed point -> its converged neighbours, nearer first
+    for (nu, r, ca), p in sorted(stored.items()):
+        if not p["success"]:
+            i = lams.index(r)
+            near = sorted((lams[j] for j in (i - 1, i + 1) if 0 <= j < len(lams)),
+                          key=lambda x: abs(x - r))
+            pending[nu, r, ca] = [stored[nu, x, ca] for x in near
+                                  if stored.get((nu, x, ca), {}).get("success")]
     out = []
     with ProcessPoolExecutor(workers) as pool:
         for attempt in range(2):                      # nearer neighbour, then the other one
-            tasks = [t[attempt] for t in rounds if len(t) > attempt]
-            rounds = [t for t in rounds if len(t) > attempt]
-            results = list(pool.map(_from_neighbour, tasks))
-            for res in results:
-                print(*res, flush=True)
-            out += results
-            done = {p for p, status in results if status == "converged"}
-            rounds = [t for t in rounds if (t[0][0], t[0][1], t[0][2]) not in done]
+            tasks = [(point, warm[attempt], max_time) for point, warm in pending.items()
+                     if len(warm) > attempt]
+            for point, status in pool.map(_from_neighbour, tasks):
+                print(point, status, flush=True)
+                out.append((point, status))
+                if status == "converged":
+                    del pending[point]
     return out
 
 
