@@ -22,8 +22,10 @@ which every solve starts from the previous converged point (:func:`line_tasks`):
   point is stored and converged (:func:`_faster_point`), first whatever λ/λc, its ladder allowed
   as high as a stored shape's (``bem.vesicle.pipeline.branch_modes``); below
   Ca_S = ``bem.vesicle.pipeline.VELOCITY_FIRST`` a neighbour at the same velocity comes after
-  the solver's own continuation along the velocity. The record's ``seed`` names the start that
-  converged, its ``message`` the reasons of the others.
+  the solver's own continuation along the velocity, unless the caller asks for it first (a
+  retry of a point whose own starts failed, ``neighbour_first``; its ladder then climbs as the
+  faster point's does). The record's ``seed`` names the start that converged, its ``message``
+  the reasons of the others.
 
 Every finished point, converged or failed, is written at once as its own JSON file
 (:func:`correlations.solution_map.point_filename`) through :func:`lubrication.io.write_json`
@@ -319,10 +321,11 @@ def _now() -> str:
     return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
 
 
-def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
+def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time, neighbour_first=False):
     """One BEM point. ``warm``: the previous converged point of the line (a dict with ``nu``,
     ``lam_ratio`` and ``shape``: a stored record or what this function returned), or None.
-    The starts are tried in the order of the module docstring, within ``max_time`` in all.
+    The starts are tried in the order of the module docstring (``warm`` first whatever the
+    order if ``neighbour_first``), within ``max_time`` in all.
     The point's status is CONVERGED if a start converged, else the leading status of the failed
     starts (:func:`lubrication.results.leading_status`). Returns (record fields, the warm start
     of the next point or None)."""
@@ -342,14 +345,16 @@ def _solve_bem(nu, lam_ratio, ca_b, warm, options, max_time):
         # a neighbour at the same velocity is not for a slow red cell, where it may sit on a
         # compressed, self-equilibrated state: its own continuation along the velocity first
         faster = warm.get("ca_b", ca_b) != ca_b
-        first = faster or (lam_ratio <= vesicle.NEAR_CRITICAL
+        first = neighbour_first or faster or (lam_ratio <= vesicle.NEAR_CRITICAL
                            and not options.get("ca_s", math.inf) < VELOCITY_FIRST)
         label = (f"neighbour (nu={warm['nu']:g}, lam/lam_c={warm['lam_ratio']:g}"
                  + (f", Ca_B={warm['ca_b']:g})" if faster else ")"))
         starts.insert(0 if first else 1, (label, neighbour))
-    # the same cell faster is on a steady branch: as for a stored shape, an estimate still above
-    # the tolerance at the default cap is resolution, so its ladder may climb further
-    climb = faster and "n_modes" not in options and "max_modes" not in options
+    # the same cell faster, or a converged neighbour asked for first, is on a steady branch: as
+    # for a stored shape, an estimate still above the tolerance at the default cap is
+    # resolution, so its ladder may climb further
+    climb = ((faster or neighbour_first) and "n_modes" not in options
+             and "max_modes" not in options)
     deeper = {**options, "max_modes": branch_modes(red_cell=True)} if climb else options
     deadline = None if max_time is None else time.monotonic() + max_time
     failures, found, bie, res = [], [], 0, None
@@ -466,14 +471,16 @@ def _failed_fields(status: Status, message: str) -> dict:
             "error_estimate": dict.fromkeys(QUANTITIES), "shape": None}
 
 
-def _point(method, nu, lam_ratio, ca_b, warm, options, max_time, provenance):
-    """Solve one point and return (its record, the next warm start). A solver exception is a
+def _point(method, nu, lam_ratio, ca_b, warm, options, max_time, provenance, **start):
+    """Solve one point and return (its record, the next warm start); ``start``: keywords of the
+    method's solver (``neighbour_first`` of :func:`_solve_bem`). A solver exception is a
     failed point with the exception as reason (it is stored, not raised): status
     REJECTED_START for an InvalidParameterError (the solver's own start refused, e.g. a seed
     density that is not positive), NOT_CONVERGED for any other."""
     clock = time.perf_counter()
     try:
-        fields, warm_next = SOLVERS[method](nu, lam_ratio, ca_b, warm, options, max_time)
+        fields, warm_next = SOLVERS[method](nu, lam_ratio, ca_b, warm, options, max_time,
+                                            **start)
     except Exception as exc:        # noqa: BLE001 - stored as the failure reason
         status = (Status.REJECTED_START if isinstance(exc, InvalidParameterError)
                   else Status.NOT_CONVERGED)

@@ -1,13 +1,16 @@
 """Does the solution map's error bar cover its error? Coarsened-grid check on the stored points.
 
-Run with ``python tests/benchmarks/map_error_bars.py [--build DIR]``. For each axis, a map is
-packed from the build folder (default: the committed one) without some of its nodes (ν = 0.65,
-0.75, 0.85; or the BEM λ/λc = 0.3, 0.5, 0.7), and queried at the left-out points, whose stored
-values are the truth. Printed per quantity: points, the largest relative error, the fraction
-of points whose error bar covers the error, and the median of bar / error. The left-out grid has
-twice the spacing of the shipped one, so errors here are larger than the shipped map's (degree-2
-interpolation: up to 8×); the check is of the error bar, not of the map's accuracy (that is
-``map_offgrid.py``). No solver runs; a few seconds.
+Run with ``python tests/benchmarks/map_error_bars.py [--build DIR] [--nu ...] [--lam-ratio ...]``.
+For each axis, a map is packed from the build folder (default: the committed one) without some
+of its nodes (default ν = 0.65, 0.75, 0.85; or the BEM λ/λc = 0.3, 0.5, 0.7), and queried at
+the left-out points, whose stored values are the truth. Printed per quantity: points, the
+largest relative error, the fraction of points whose error bar covers the error, and the median
+of bar / error. With the default nodes the left-out grid has twice the spacing of the shipped
+one, so errors here are larger than the shipped map's (degree-2 interpolation: up to 8×); the
+check is of the error bar, not of the map's accuracy (that is ``map_offgrid.py``). The red-cell
+slice: ``--build docs/data/rbc_slice_build --nu 0.575 --lam-ratio 0.35 0.45`` leaves out the
+row and the columns added last, i.e. queries the grid it had before at them. No solver runs; a
+few seconds.
 """
 
 from __future__ import annotations
@@ -26,21 +29,21 @@ KEYS = ("V_over_U", "dp_plus_R0", "ell", "film_min", "tension_max")
 LEFT_OUT = {"nu": (0.65, 0.75, 0.85), "lam_ratio": (0.3, 0.5, 0.7)}
 
 
-def coarsened(build: Path, axis: str, tmp: Path) -> list[dict]:
-    """Pack ``build`` without the nodes of :data:`LEFT_OUT` on ``axis``, query it at the
-    left-out converged points; one row of statistics per quantity."""
+def coarsened(build: Path, axis: str, tmp: Path, left_out=LEFT_OUT) -> list[dict]:
+    """Pack ``build`` without the nodes ``left_out[axis]``, query it at the left-out converged
+    points; one row of statistics per quantity."""
     points = read_points(build)
     info = json.loads((build / "build.json").read_text())
     grid = info["grid"]
 
     def out(p):
-        return p[axis] in LEFT_OUT[axis] and (axis == "nu" or p["method"] == "bem")
+        return p[axis] in left_out[axis] and (axis == "nu" or p["method"] == "bem")
 
     if axis == "nu":
-        grid["nu"] = [v for v in grid["nu"] if v not in LEFT_OUT[axis]]
+        grid["nu"] = [v for v in grid["nu"] if v not in left_out[axis]]
     else:
         grid["lam_ratio"]["bem"] = [v for v in grid["lam_ratio"]["bem"]
-                                    if v not in LEFT_OUT[axis]]
+                                    if v not in left_out[axis]]
     folder = tmp / axis
     folder.mkdir()
     (folder / "build.json").write_text(json.dumps(info))
@@ -72,15 +75,28 @@ def coarsened(build: Path, axis: str, tmp: Path) -> list[dict]:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--build", default=str(BUILD), help="map build folder")
+    ap.add_argument("--nu", type=float, nargs="*", default=LEFT_OUT["nu"],
+                    help="ν nodes to leave out (none: no ν check)")
+    ap.add_argument("--lam-ratio", type=float, nargs="*", default=LEFT_OUT["lam_ratio"],
+                    help="BEM λ/λc nodes to leave out (none: no λ/λc check)")
     ap.add_argument("--json", help="write the table to this file")
     args = ap.parse_args(argv)
     build = Path(args.build)
     if not (build / "build.json").is_file():
         ap.error(f"--build: {build} is not a map build folder")
+    grid = json.loads((build / "build.json").read_text())["grid"]
+    left_out = {"nu": tuple(args.nu), "lam_ratio": tuple(args.lam_ratio)}
+    for axis, nodes in (("nu", grid["nu"]), ("lam_ratio", grid["lam_ratio"]["bem"])):
+        inner = nodes[1:-1]
+        for v in left_out[axis]:
+            if v not in inner:
+                ap.error(f"--{axis.replace('_', '-')}: {v:g} is not an inner node of the build "
+                         f"({', '.join(f'{x:g}' for x in inner)})")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for axis in LEFT_OUT:
-            rows += coarsened(build, axis, Path(tmp))
+        for axis in left_out:
+            if left_out[axis]:
+                rows += coarsened(build, axis, Path(tmp), left_out)
     print(f"{'left out':>9} {'quantity':>12} {'points':>6} {'max rel err':>11} "
           f"{'covered':>8} {'median bar/err':>14}")
     for r in rows:
@@ -88,7 +104,7 @@ def main(argv=None) -> int:
               f"{r['covered']:8.0%} {r['median_bar_over_error']:14.1f}")
     if args.json:
         from lubrication.io import write_json
-        write_json(args.json, {"build": str(build), "left_out": LEFT_OUT, "rows": rows})
+        write_json(args.json, {"build": str(build), "left_out": left_out, "rows": rows})
     return 0
 
 

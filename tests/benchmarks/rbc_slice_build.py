@@ -8,7 +8,8 @@ Waugh 1987) and the Evans-Fung disc as stress-free shape: BEM points on ν 0.55-
 that each Ca_B line is the one cell at one velocity, and the tolerance :data:`BEM_TOL`. Run
 with ``python tests/benchmarks/rbc_slice_build.py [--workers 2] [--max-time 900]``; a rerun
 resumes (every finished point is its own file); ``--retry-failed`` solves the failed points
-again, ``--from-neighbours`` from their converged λ/λc neighbours (:func:`retry_from_neighbours`).
+again, ``--from-neighbours`` from their converged ν and λ/λc neighbours
+(:func:`retry_from_neighbours`).
 ``python tests/benchmarks/rbc_slice_build.py --pack correlations/data/rbc_slice_map.json`` packs
 its complete velocity lines (:func:`pack_complete`) into the map the red-cell estimate reads.
 """
@@ -31,7 +32,7 @@ from lubrication.geometry import cell_from_volume_area
 FOLDER = Path(__file__).resolve().parents[2] / "docs" / "data" / "rbc_slice_build"
 GS_N_M = 6e-6                                            # Hochmuth & Waugh 1987
 VELOCITIES_MM_S = (0.01, 0.03, 0.06, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0)
-NU = (0.55, 0.6, 0.65, 0.7)
+NU = (0.55, 0.575, 0.6, 0.65, 0.7)
 LAM_RATIO = (0.2, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95)
 #: The BEM's relative tolerance on its estimated discretisation error (the solver's ``tol``;
 #: default 1e-4). A slow, confined red cell converges slowly in modes (Δp⁺ at (0.65, 0.8 λc,
@@ -84,36 +85,48 @@ def pack_complete(out: Path) -> tuple[Path, list[float]]:
 
 def _from_neighbour(task: tuple) -> tuple:
     """Solve the failed point (ν, λ/λc, Ca_B) from ``warm``, the stored converged point of a
-    λ/λc neighbour at the same ν and velocity, by the build's own point solver; the record
-    replaces the stored one only if it converged. Returns (point, status)."""
+    neighbour at the same velocity, by the build's own point solver with that start first (the
+    build's own starts, which failed, after it); the record replaces the stored one only if it
+    converged. Returns (point, status)."""
     point, warm, max_time = task
+    start = f"converged neighbour (ν {warm['nu']:g}, λ/λc {warm['lam_ratio']:g}), same velocity"
     record, _ = _point("bem", *point, warm, bem_options(), max_time,
-                       {**provenance(), "start": "converged λ/λc neighbour at the same velocity"})
+                       {**provenance(), "start": start}, neighbour_first=True)
     if record["success"]:
         write_json(FOLDER / point_filename("bem", *point), record, indent=1, sort_keys=False)
     return point, record["status"]
 
 
-def retry_from_neighbours(workers: int, max_time: float) -> list[tuple]:
-    """Solve every failed point of the slice again, started from each converged λ/λc
-    neighbour on its (ν, velocity) line in turn (nearer first) until one converges. The build's
-    starts are the same cell faster, the neighbour in ν and the seed bank; where the slice's
-    points at ν = 0.55 self-intersect or find no steady state from those, the next confined
-    point at the same velocity can still be on the steady branch. Returns (point, status) per
-    attempt."""
-    lams = read_build(FOLDER)["grid"]["lam_ratio"]["bem"]
+def _neighbours(nodes: list, x: float) -> list:
+    """The nodes next to ``x`` in ``nodes``, nearer first."""
+    i = nodes.index(x)
+    return sorted((nodes[j] for j in (i - 1, i + 1) if 0 <= j < len(nodes)),
+                  key=lambda y: abs(y - x))
+
+
+def retry_from_neighbours(workers: int, max_time: float, velocities=None) -> list[tuple]:
+    """Solve every failed point of the slice again (only on the lines of ``velocities`` [mm/s]
+    if given), started from each converged neighbour at the same velocity in turn until one
+    converges: first its ν neighbours at the same λ/λc, then its λ/λc neighbours at the same
+    ν, nearer first. The build's starts are the same cell faster, the neighbour in ν at a start of
+    the line and the seed bank; where the slice's low-ν points self-intersect or find no steady
+    state from those, the same cell at the next ν, or the next confinement, can still be on the
+    steady branch. Returns (point, status) per attempt."""
+    grid = read_build(FOLDER)["grid"]
+    nus, lams = grid["nu"], grid["lam_ratio"]["bem"]
+    lines = None if velocities is None else {
+        c for c, u in zip(slice_grid()[0]["ca_b"], VELOCITIES_MM_S) if u in velocities}
     stored = {(p["nu"], p["lam_ratio"], p["ca_b"]): p for p in read_points(FOLDER)}
-    pending = {}                  # failed point -> its converged neighbours, nearer first
+    pending = {}                  # failed point -> its converged neighbours, in order
     for (nu, r, ca), p in sorted(stored.items()):
-        if not p["success"]:
-            i = lams.index(r)
-            near = sorted((lams[j] for j in (i - 1, i + 1) if 0 <= j < len(lams)),
-                          key=lambda x: abs(x - r))
-            pending[nu, r, ca] = [stored[nu, x, ca] for x in near
-                                  if stored.get((nu, x, ca), {}).get("success")]
+        if not p["success"] and (lines is None or ca in lines):
+            near = ([(x, r) for x in _neighbours(nus, nu)]
+                    + [(nu, x) for x in _neighbours(lams, r)])
+            pending[nu, r, ca] = [stored[key + (ca,)] for key in near
+                                  if stored.get(key + (ca,), {}).get("success")]
     out = []
     with ProcessPoolExecutor(workers) as pool:
-        for attempt in range(2):                      # nearer neighbour, then the other one
+        for attempt in range(max(map(len, pending.values()), default=0)):
             tasks = [(point, warm[attempt], max_time) for point, warm in pending.items()
                      if len(warm) > attempt]
             for point, status in pool.map(_from_neighbour, tasks):
@@ -131,8 +144,11 @@ def main(argv=None) -> int:
     p.add_argument("--retry-failed", action="store_true",
                    help="solve again the stored points that did not converge")
     p.add_argument("--from-neighbours", action="store_true",
-                   help="solve the failed points again from their converged λ/λc neighbours "
-                        "at the same velocity")
+                   help="solve the failed points again from their converged ν and λ/λc "
+                        "neighbours at the same velocity")
+    p.add_argument("--velocities", type=float, nargs="+", metavar="MM_S",
+                   choices=VELOCITIES_MM_S,
+                   help="with --from-neighbours: only the points at these velocities [mm/s]")
     p.add_argument("--pack", type=Path, metavar="FILE",
                    help="instead of building, pack the complete velocity lines into FILE")
     args = p.parse_args(argv)
@@ -141,7 +157,7 @@ def main(argv=None) -> int:
         print(f"packed {path}: Ca_B {', '.join(f'{c:g}' for c in done)}")
         return 0
     if args.from_neighbours:
-        retry_from_neighbours(args.workers, args.max_time)
+        retry_from_neighbours(args.workers, args.max_time, args.velocities)
         return 0
     print(build_map(FOLDER, slice_grid()[0], options={"bem": bem_options()},
                     workers=args.workers, max_time=args.max_time, retry_failed=args.retry_failed,

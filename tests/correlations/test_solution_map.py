@@ -20,6 +20,7 @@ from pathlib import Path
 import pytest
 
 from lubrication.geometry import critical_confinement
+from lubrication.results import Status
 from correlations import map_build
 from correlations.files import read_json
 from correlations.map_build import build_map, line_tasks, make_grid
@@ -446,3 +447,49 @@ def test_a_neighbour_shape_that_cannot_start_falls_back_to_the_own_seed(monkeypa
     assert fields["success"] and fields["status"] == "converged"
     assert fields["seed"] == "lubrication"
     assert fields["failed_starts"][0].startswith("neighbour (nu=0.9, lam/lam_c=0.9): cannot start")
+
+
+@pytest.mark.parametrize("neighbour_first", [False, True])
+def test_a_slow_red_cell_tries_a_neighbour_at_its_velocity_second_unless_asked_first(
+        monkeypatch, neighbour_first):
+    """Below Ca_S = VELOCITY_FIRST a red cell's own continuation along the velocity comes
+    before a neighbour's shape at the same velocity; a retry of a point whose own starts failed
+    (``neighbour_first``, tests/benchmarks/rbc_slice_build.py --from-neighbours) starts from
+    the neighbour. Here the own start fails and the neighbour converges: the same record either
+    way, but the neighbour is solved first only when asked, and the own start is then not
+    needed; asked first, the converged neighbour is a stored steady shape whose ladder may climb
+    above the default mode cap (``max_modes``), as the same cell's faster shape does."""
+    import types
+
+    import numpy as np
+
+    import bem.shape
+    import bem.vesicle
+    from bem.vesicle.pipeline import VELOCITY_FIRST
+
+    calls, climbs = [], []
+
+    def solve(nu, lam_ratio, ca_b, initial=None, max_time=None, **options):
+        calls.append(initial)
+        climbs.append("max_modes" in options)
+        assert options["ca_s"] == pytest.approx(ca_b / 231.859) and options["ca_s"] < VELOCITY_FIRST
+        ok = initial is not None
+        d = {"lam": 1.0, "lam_c": 1.2, "shape_class": "parachute", "residual": 1e-6,
+             "panels": 10, "refinement": [(16,), (24,)], "tol": 1e-3, "residual_tol": 1e-3,
+             **{q: 1.0 for q in QUANTITIES}}
+        return types.SimpleNamespace(success=ok, message="converged" if ok else "self-intersects",
+                                     status=None if ok else Status.NO_STEADY_STATE,
+                                     bie_solves=5, seed="own", error_estimate={},
+                                     to_dict=lambda **k: d, modes=np.zeros(3),
+                                     density=np.ones(2))
+
+    monkeypatch.setattr(bem.shape.SpectralCurve, "with_volume_radius",
+                        staticmethod(lambda *a, **k: "neighbour curve"))
+    monkeypatch.setattr(bem.vesicle, "solve_vesicle", solve)
+    warm = {"nu": 0.6, "lam_ratio": 0.6, "ca_b": 4.6372,
+            "shape": {"modes": [0.0], "density": [1.0]}}
+    fields, _ = map_build._solve_bem(0.575, 0.6, 4.6372, warm, {"shear_ratio": 231.859}, None,
+                                     neighbour_first=neighbour_first)
+    assert calls == (["neighbour curve"] if neighbour_first else [None, "neighbour curve"])
+    assert climbs[-1] is neighbour_first
+    assert fields["success"] and fields["seed"] == "neighbour (nu=0.6, lam/lam_c=0.6)"
