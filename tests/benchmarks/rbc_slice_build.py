@@ -152,6 +152,8 @@ def main(argv=None) -> int:
     p.add_argument("--pack", type=Path, metavar="FILE",
                    help="instead of building, pack the complete velocity lines into FILE")
     args = p.parse_args(argv)
+    if args.velocities and not args.from_neighbours:
+        p.error("--velocities selects the points of --from-neighbours; give both")
     if args.pack:
         path, done = pack_complete(args.pack)
         print(f"packed {path}: Ca_B {', '.join(f'{c:g}' for c in done)}")
