@@ -22,7 +22,9 @@ import statistics
 import tempfile
 from pathlib import Path
 
-from correlations.solution_map import load_map, pack_map, point_filename, query_map, read_points
+from correlations.files import UnreadableFile
+from correlations.solution_map import (load_map, pack_map, point_filename, query_map,
+                                     read_build, read_points)
 
 BUILD = Path(__file__).resolve().parents[2] / "correlations" / "data" / "solution_map_build"
 KEYS = ("V_over_U", "dp_plus_R0", "ell", "film_min", "tension_max")
@@ -84,7 +86,10 @@ def main(argv=None) -> int:
     build = Path(args.build)
     if not (build / "build.json").is_file():
         ap.error(f"--build: {build} is not a map build folder")
-    grid = json.loads((build / "build.json").read_text())["grid"]
+    try:
+        grid = read_build(build, "--build")["grid"]
+    except UnreadableFile as exc:
+        ap.error(str(exc))
     left_out = {"nu": tuple(args.nu), "lam_ratio": tuple(args.lam_ratio)}
     for axis, nodes in (("nu", grid["nu"]), ("lam_ratio", grid["lam_ratio"]["bem"])):
         inner = nodes[1:-1]
